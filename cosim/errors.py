@@ -1,0 +1,70 @@
+"""The one small error hierarchy of cosim.
+
+Every message names the thing that is wrong, the value it had and what is allowed, so a user
+can fix the input without reading our source.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+
+class CosimError(Exception):
+    """Base class of every error cosim raises on purpose."""
+
+
+class ConfigurationError(CosimError, ValueError):
+    """A parameter, a scenario or a setup value is not acceptable.
+
+    Parameters
+    ----------
+    message : str
+        Full text; prefer :meth:`out_of_range` for the common case.
+    """
+
+    @classmethod
+    def out_of_range(
+        cls, name: str, value: object, allowed: str, *, where: str = ""
+    ) -> ConfigurationError:
+        """Build the standard message: ``NAME = VALUE is outside ALLOWED``.
+
+        Parameters
+        ----------
+        name : str
+            Parameter name as the user wrote it (vendor name alongside where useful).
+        value : object
+            The offending value.
+        allowed : str
+            The allowed range or set, e.g. ``"0..65535"``.
+        where : str, optional
+            Location prefix such as ``"program.bas line 12"``.
+        """
+        prefix = f"{where}: " if where else ""
+        return cls(f"{prefix}{name} = {value!r} is not allowed (allowed: {allowed})")
+
+
+class FmuError(CosimError):
+    """An FMU call failed; carries the FMU's own log messages.
+
+    Parameters
+    ----------
+    message : str
+        What we were doing when it failed.
+    log : sequence of str
+        The messages the FMU logged (most recent last).
+    """
+
+    def __init__(self, message: str, log: Sequence[str] = ()) -> None:
+        self.log = tuple(log)
+        text = message
+        if self.log:
+            text += "\nFMU log:\n  " + "\n  ".join(self.log[-20:])
+        super().__init__(text)
+
+
+class TimingViolation(CosimError):
+    """A controller rule was broken at run time in a way the model cannot continue from."""
+
+
+class ScenarioError(CosimError):
+    """A user's scenario script is wrong; the message carries its file and line."""

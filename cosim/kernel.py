@@ -1,0 +1,156 @@
+"""The event kernel: one SimPy environment whose clock is an integer tick count.
+
+:class:`Simulation` owns the SimPy environment, the :class:`~cosim.timebase.TimeBase` and the
+:class:`~cosim.trace.Trace`. Controllers are SimPy processes that wait with :meth:`Simulation.at`
+/ :meth:`Simulation.after` (integer ticks and a named :class:`~cosim.timebase.Priority`).
+
+Plants that can announce events (an FMU with event indicators) register a *look-ahead*: just
+before the kernel moves its clock from ``now`` to the next scheduled instant ``t_next``, every
+look-ahead is called with ``t_next``. Nothing can change the plant's inputs in ``[now, t_next)``,
+so the plant may safely advance to ``t_next``; if it finds an event earlier it schedules it, and
+the kernel runs that event first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Generator
+from pathlib import Path
+from typing import Any
+
+import simpy
+from simpy.events import Event
+
+from cosim.errors import ConfigurationError
+from cosim.timebase import Priority, TimeBase
+from cosim.trace import Trace
+
+LookAhead = Callable[[int], None]
+
+
+class _Environment(simpy.Environment):
+    """A SimPy environment that calls look-aheads before its clock moves."""
+
+    def __init__(self) -> None:
+        super().__init__(initial_time=0)
+        self.look_aheads: list[LookAhead] = []
+
+    def step(self) -> None:
+        if self.look_aheads and self._queue:
+            t_next = int(self._queue[0][0])
+            if t_next > self._now:
+                for look_ahead in self.look_aheads:
+                    look_ahead(t_next)
+        super().step()
+
+
+class At(Event):
+    """An event that fires at an absolute tick with a named priority."""
+
+    def __init__(self, env: simpy.Environment, t: int, priority: int, value: Any = None) -> None:
+        super().__init__(env)
+        self._ok = True
+        self._value = value
+        env.schedule(self, priority, t - env.now)  # type: ignore[arg-type]
+
+
+class Simulation:
+    """A co-simulation in exact integer time.
+
+    Parameters
+    ----------
+    timebase : TimeBase, optional
+        Declared resolution (1 ns by default).
+    seed : int
+        Seed of the simulation's random generator (:attr:`rng`); same seed, same trace.
+
+    Examples
+    --------
+    >>> sim = Simulation()
+    >>> log = []
+    >>> def blink(sim):
+    ...     for k in range(3):
+    ...         yield sim.at(k * 500)
+    ...         log.append(sim.now)
+    >>> _ = sim.process(blink(sim))
+    >>> sim.run(until=2_000)
+    >>> log
+    [0, 500, 1000]
+    """
+
+    def __init__(self, *, timebase: TimeBase | None = None, seed: int = 0) -> None:
+        import numpy as np
+
+        self.timebase = timebase or TimeBase()
+        self.env = _Environment()
+        self.trace = Trace(self.timebase)
+        self.seed = seed
+        self.rng = np.random.default_rng(seed)
+        self._closers: list[Callable[[], None]] = []
+
+    @property
+    def now(self) -> int:
+        """Current simulation time in ticks."""
+        return int(self.env.now)
+
+    def ticks(self, value: int | float | str, unit: str | None = None, *, name: str = "time") -> int:
+        """Shorthand for :meth:`TimeBase.ticks`."""
+        return self.timebase.ticks(value, unit, name=name)
+
+    def at(self, t: int, priority: int = Priority.NORMAL, value: Any = None) -> Event:
+        """An event at absolute tick ``t`` (not in the past)."""
+        self.timebase.check_ticks(t, name="t")
+        if t < self.now:
+            raise ConfigurationError(f"t = {t} ticks is in the past (now = {self.now})")
+        return At(self.env, t, priority, value)
+
+    def after(self, delay: int, priority: int = Priority.NORMAL, value: Any = None) -> Event:
+        """An event ``delay`` ticks from now."""
+        self.timebase.check_ticks(delay, name="delay")
+        return At(self.env, self.now + delay, priority, value)
+
+    def call_at(self, t: int, priority: int, callback: Callable[[], None]) -> Event:
+        """Run ``callback()`` at tick ``t`` with ``priority`` (no process needed)."""
+        event = self.at(t, priority)
+        event.callbacks.append(lambda _event: callback())
+        return event
+
+    def process(self, generator: Generator[Event, Any, Any]) -> simpy.Process:
+        """Start a SimPy process."""
+        return self.env.process(generator)
+
+    def add_look_ahead(self, look_ahead: LookAhead) -> None:
+        """Register a look-ahead called with ``t_next`` before the clock moves (see module doc)."""
+        self.env.look_aheads.append(look_ahead)
+
+    def on_close(self, closer: Callable[[], None]) -> None:
+        """Register a teardown action (closing FMUs), run by :meth:`close` in reverse order."""
+        self._closers.append(closer)
+
+    def run(self, until: int, *, out: str | Path | None = None) -> None:
+        """Run until tick ``until``; with ``out``, write the trace there even if the run fails.
+
+        Parameters
+        ----------
+        until : int
+            End time in ticks (exclusive for events scheduled exactly then).
+        out : path, optional
+            Folder to write the trace exports to (also on failure: nothing recorded is lost).
+        """
+        self.timebase.check_ticks(until, name="until")
+        try:
+            self.env.run(until=until)
+        finally:
+            self.trace.end_t = self.now
+            if out is not None:
+                self.trace.write(out)
+
+    def close(self) -> None:
+        """Tear down everything registered with :meth:`on_close`."""
+        while self._closers:
+            self._closers.pop()()
+
+    def __enter__(self) -> Simulation:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

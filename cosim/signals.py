@@ -1,0 +1,141 @@
+"""Signals: the wires between controllers and plants.
+
+A :class:`Signal` has a current value; setting a new value records an edge in the trace at the
+current tick and tells every subscriber (the master uses this to advance an FMU to now and set
+its input). A :class:`PulseTrain` carries step pulses as segments (see :mod:`cosim.pulses`).
+Controllers only know signals, never FMUs: any plant or a test double can stand behind them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from cosim.errors import ConfigurationError
+
+if TYPE_CHECKING:
+    from cosim.kernel import Simulation
+
+Listener = Callable[["Signal"], None]
+SegmentListener = Callable[["PulseTrain", int, int, int, int], None]
+
+
+class Signal:
+    """A recorded value that changes at exact ticks.
+
+    Parameters
+    ----------
+    sim : Simulation
+        The simulation whose clock and trace are used.
+    name : str
+        Trace name, ``<device>.<axis>.<signal>`` (see :mod:`cosim.trace`).
+    kind : {'bit', 'int', 'real'}
+        Logic level, integer register or real value.
+    initial : float
+        Value at t = 0 (recorded).
+    unit, description : str
+        For the trace and exports.
+    """
+
+    def __init__(self, sim: Simulation, name: str, *, kind: str = "bit", initial: float = 0,
+                 unit: str = "", description: str = "") -> None:
+        if kind not in ("bit", "int", "real"):
+            raise ConfigurationError.out_of_range(f"kind of signal {name}", kind, "bit, int, real")
+        self.sim = sim
+        self.name = name
+        self.kind = kind
+        self._listeners: list[Listener] = []
+        sim.trace.declare(name, kind, unit=unit, description=description)
+        self.value = self._coerce(initial)
+        sim.trace.record(name, sim.now, self.value)
+
+    def _coerce(self, value: float) -> float:
+        if self.kind == "bit":
+            return 1 if value else 0
+        if self.kind == "int":
+            if isinstance(value, float) and not value.is_integer():
+                raise ConfigurationError(f"signal {self.name} is an integer; got {value!r}")
+            return int(value)
+        return float(value)
+
+    def subscribe(self, listener: Listener) -> None:
+        """Call ``listener(signal)`` after every change of value."""
+        self._listeners.append(listener)
+
+    def set(self, value: float) -> bool:
+        """Set the value now; returns True if it changed (and was recorded)."""
+        new = self._coerce(value)
+        if new == self.value:
+            return False
+        self.value = new
+        self.sim.trace.record(self.name, self.sim.now, new)
+        for listener in self._listeners:
+            listener(self)
+        return True
+
+    def __repr__(self) -> str:
+        return f"Signal({self.name}={self.value})"
+
+
+class Sampled:
+    """A real value recorded at requested sample times only (an analog plant output)."""
+
+    def __init__(self, sim: Simulation, name: str, *, unit: str = "", description: str = "") -> None:
+        self.sim = sim
+        self.name = name
+        sim.trace.declare(name, "real", unit=unit, description=description)
+
+    def record(self, value: float) -> None:
+        """Record ``value`` at the current tick."""
+        self.sim.trace.record(self.name, self.sim.now, float(value))
+
+
+class PulseTrain:
+    """Step pulses, emitted as evenly spread segments.
+
+    Parameters
+    ----------
+    sim : Simulation
+    name : str
+        Trace name of the step signal, e.g. ``pokeys.x.step``.
+    pulse_width : int
+        Width of a drawn pulse [ticks] (VCD display; checks use the pulse instants).
+    description : str
+
+    Notes
+    -----
+    ``position`` counts emitted pulses, signed by direction (dir 1 = positive).
+    """
+
+    def __init__(self, sim: Simulation, name: str, *, pulse_width: int = 1, description: str = "") -> None:
+        self.sim = sim
+        self.name = name
+        self.position = 0
+        self._listeners: list[SegmentListener] = []
+        sim.trace.declare(name, "pulse", description=description, pulse_width=pulse_width)
+
+    def subscribe(self, listener: SegmentListener) -> None:
+        """Call ``listener(train, t0, duration, count, direction)`` for every segment."""
+        self._listeners.append(listener)
+
+    def emit(self, t0: int, duration: int, count: int, direction: int) -> None:
+        """Emit ``count`` pulses spread over ``[t0, t0 + duration)`` in ``direction`` (1 or 0).
+
+        Segments are emitted at or before ``t0`` (a controller announces the slot it starts).
+        """
+        if count < 0 or duration <= 0 or direction not in (0, 1):
+            raise ConfigurationError(
+                f"{self.name}: segment count={count} (>= 0), duration={duration} (> 0 ticks), "
+                f"direction={direction} (0 or 1) is not valid"
+            )
+        self.sim.trace.record_segment(self.name, t0, duration, count, direction)
+        self.position += count if direction else -count
+        for listener in self._listeners:
+            listener(self, t0, duration, count, direction)
+
+    def pulse(self, t: int, direction: int) -> None:
+        """Emit a single pulse at tick ``t`` (for trains that are not evenly spread)."""
+        self.sim.trace.record_pulse(self.name, t, direction)
+        self.position += 1 if direction else -1
+        for listener in self._listeners:
+            listener(self, t, 1, 1, direction)

@@ -1,0 +1,234 @@
+"""The trace: the single record of everything a simulation did.
+
+Signal names follow one scheme, the same in the Python API, VCD, Parquet and CSV::
+
+    <device>.<axis>.<signal>      e.g. pokeys.x.step, trio.axis3.gate, pmac.cs1.timebase
+    <device>.<signal>             for devices without axes, e.g. laser.power, pokeys.buffer_level
+
+lower case, dot-separated, each part ``[a-z0-9_]``. In a waveform viewer the dots are scopes,
+so ``trio.axis3.gate`` appears as signal ``gate`` in scope ``trio`` > ``axis3``.
+
+Kinds of record (all times are integer ticks of the trace's resolution):
+
+* ``bit`` / ``int`` signals: exact edge lists ``(t, value)``, value held until the next edge;
+* ``real`` signals: value changes or samples ``(t, value)`` (analog outputs at requested times);
+* ``pulse`` trains: segments ``(t0, duration, count, dir)`` placed by the rule of
+  :mod:`cosim.pulses`, plus any pulses given one by one; :meth:`Trace.pulses` materialises them.
+
+Exports: :meth:`Trace.write` puts ``trace.vcd``, ``trace_meta.json`` and Parquet (or CSV)
+tables into a folder; :meth:`Trace.load` reads the tables back.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from array import array
+from dataclasses import asdict, dataclass, field
+from fractions import Fraction
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from cosim.errors import ConfigurationError
+from cosim.pulses import materialize_pulses
+from cosim.timebase import TimeBase
+
+Kind = Literal["bit", "int", "real", "pulse"]
+KINDS: tuple[str, ...] = ("bit", "int", "real", "pulse")
+_NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z0-9_]+)*$")
+
+
+@dataclass(frozen=True)
+class SignalInfo:
+    """What a recorded signal is.
+
+    Parameters
+    ----------
+    kind : {'bit', 'int', 'real', 'pulse'}
+    unit : str
+        Physical unit of the value (``''`` for logic levels and counts).
+    description : str
+        One line for humans.
+    pulse_width : int
+        For pulse trains: width of each drawn pulse [ticks] (VCD only).
+    """
+
+    kind: str
+    unit: str = ""
+    description: str = ""
+    pulse_width: int = 1
+
+
+@dataclass
+class _Channel:
+    t: array = field(default_factory=lambda: array("q"))
+    v: array = field(default_factory=lambda: array("d"))
+
+
+@dataclass
+class _PulseChannel:
+    t0: array = field(default_factory=lambda: array("q"))
+    duration: array = field(default_factory=lambda: array("q"))
+    count: array = field(default_factory=lambda: array("q"))
+    direction: array = field(default_factory=lambda: array("b"))
+    single_t: array = field(default_factory=lambda: array("q"))
+    single_dir: array = field(default_factory=lambda: array("b"))
+
+
+class Trace:
+    """Columnar record of edges, values and pulse segments, in integer ticks.
+
+    Parameters
+    ----------
+    timebase : TimeBase
+        Resolution of the recorded times.
+    """
+
+    def __init__(self, timebase: TimeBase | None = None) -> None:
+        self.timebase = timebase or TimeBase()
+        self.info: dict[str, SignalInfo] = {}
+        self._values: dict[str, _Channel] = {}
+        self._pulses: dict[str, _PulseChannel] = {}
+        self.end_t = 0
+        self.meta: dict[str, object] = {}
+
+    # -- declaring and recording -------------------------------------------------------------
+    def declare(self, name: str, kind: str, *, unit: str = "", description: str = "",
+                pulse_width: int = 1) -> None:
+        """Declare a signal before recording it (names are checked against the scheme)."""
+        if not _NAME.match(name):
+            raise ConfigurationError(
+                f"signal name {name!r} does not follow the scheme <device>.<axis>.<signal> "
+                "(lower case, dot-separated, [a-z0-9_])"
+            )
+        if kind not in KINDS:
+            raise ConfigurationError.out_of_range(f"kind of {name}", kind, ", ".join(KINDS))
+        if name in self.info:
+            raise ConfigurationError(f"signal {name!r} is declared twice")
+        self.info[name] = SignalInfo(kind, unit, description, pulse_width)
+        if kind == "pulse":
+            self._pulses[name] = _PulseChannel()
+        else:
+            self._values[name] = _Channel()
+
+    def record(self, name: str, t: int, value: float) -> None:
+        """Record a value change (bit/int/real) or a sample (real) at tick ``t``."""
+        channel = self._values[name]
+        channel.t.append(t)
+        channel.v.append(value)
+
+    def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int) -> None:
+        """Record ``count`` pulses spread over ``[t0, t0+duration)`` (rule of :mod:`cosim.pulses`)."""
+        channel = self._pulses[name]
+        channel.t0.append(t0)
+        channel.duration.append(duration)
+        channel.count.append(count)
+        channel.direction.append(direction)
+
+    def record_pulse(self, name: str, t: int, direction: int) -> None:
+        """Record one pulse at tick ``t`` (for trains that are not evenly spread)."""
+        channel = self._pulses[name]
+        channel.single_t.append(t)
+        channel.single_dir.append(direction)
+
+    # -- reading ----------------------------------------------------------------------------
+    def names(self, kind: str | None = None) -> list[str]:
+        """Declared signal names (optionally of one kind), in declaration order."""
+        return [n for n, i in self.info.items() if kind is None or i.kind == kind]
+
+    def _channel(self, name: str) -> _Channel:
+        if name not in self._values:
+            raise KeyError(_unknown(name, self.info))
+        return self._values[name]
+
+    def edges(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
+        """``(t, value)`` of a bit/int/real signal: its changes (or samples) in time order."""
+        channel = self._channel(name)
+        return np.frombuffer(channel.t, dtype=np.int64).copy(), np.frombuffer(channel.v).copy()
+
+    samples = edges
+
+    def value_at(self, name: str, t: int) -> float:
+        """Value of a piecewise-constant signal at tick ``t`` (NaN before its first record)."""
+        times, values = self.edges(name)
+        i = int(np.searchsorted(times, t, side="right")) - 1
+        return float(values[i]) if i >= 0 else float("nan")
+
+    def segments(self, name: str) -> dict[str, npt.NDArray[np.int64]]:
+        """Raw pulse segments of a pulse train: arrays ``t0, duration, count, dir``."""
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
+        ch = self._pulses[name]
+        return {
+            "t0": np.frombuffer(ch.t0, dtype=np.int64).copy(),
+            "duration": np.frombuffer(ch.duration, dtype=np.int64).copy(),
+            "count": np.frombuffer(ch.count, dtype=np.int64).copy(),
+            "dir": np.frombuffer(ch.direction, dtype=np.int8).astype(np.int64),
+        }
+
+    def pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
+        """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order."""
+        seg = self.segments(name)
+        ch = self._pulses[name]
+        t = materialize_pulses(seg["t0"], seg["duration"], seg["count"])
+        d = np.repeat(seg["dir"].astype(np.int8), seg["count"])
+        if len(ch.single_t):
+            t = np.concatenate([t, np.frombuffer(ch.single_t, dtype=np.int64)])
+            d = np.concatenate([d, np.frombuffer(ch.single_dir, dtype=np.int8)])
+        order = np.argsort(t, kind="stable")
+        return t[order], d[order]
+
+    # -- export -----------------------------------------------------------------------------
+    def write(self, out: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:
+        """Write the trace into folder ``out`` in the given formats (``vcd``, ``parquet``, ``csv``)."""
+        from cosim import export
+
+        folder = Path(out)
+        folder.mkdir(parents=True, exist_ok=True)
+        self._write_meta(folder / "trace_meta.json")
+        for fmt in formats:
+            if fmt == "vcd":
+                export.write_vcd(self, folder / "trace.vcd")
+            elif fmt in ("parquet", "csv"):
+                export.write_tables(self, folder, fmt)
+            else:
+                raise ConfigurationError.out_of_range("trace format", fmt, "vcd, parquet, csv")
+        return folder
+
+    def _write_meta(self, path: Path) -> None:
+        res = self.timebase.resolution_s
+        meta = {
+            "resolution_s": [res.numerator, res.denominator],
+            "end_t": self.end_t,
+            "signals": {n: asdict(i) for n, i in self.info.items()},
+            "meta": self.meta,
+        }
+        path.write_text(json.dumps(meta, indent=1, default=str))
+
+    @classmethod
+    def load(cls, folder: str | Path) -> Trace:
+        """Read a trace written by :meth:`write` (Parquet or CSV tables) back."""
+        from cosim import export
+
+        folder = Path(folder)
+        meta = json.loads((folder / "trace_meta.json").read_text())
+        num, den = meta["resolution_s"]
+        trace = cls(TimeBase(Fraction(num, den)))
+        trace.end_t = int(meta["end_t"])
+        trace.meta = dict(meta.get("meta", {}))
+        for name, info in meta["signals"].items():
+            trace.declare(name, info["kind"], unit=info["unit"], description=info["description"],
+                          pulse_width=info["pulse_width"])
+        export.read_tables(trace, folder)
+        return trace
+
+
+def _unknown(name: str, known: dict[str, SignalInfo]) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(name, list(known), n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    return f"no signal named {name!r} in the trace{hint}"
