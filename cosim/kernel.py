@@ -33,8 +33,13 @@ class _Environment(simpy.Environment):
     def __init__(self) -> None:
         super().__init__(initial_time=0)
         self.look_aheads: list[LookAhead] = []
+        self.on_progress: Callable[[int], None] | None = None
+        self._steps = 0
 
     def step(self) -> None:
+        self._steps += 1
+        if self.on_progress is not None and not self._steps & 0xFFF:
+            self.on_progress(int(self._now))
         if self.look_aheads and self._queue:
             t_next = int(self._queue[0][0])
             if t_next > self._now:

@@ -63,7 +63,7 @@ def test_bad_names_and_unknown_signals(sim: Simulation) -> None:
     with pytest.raises(ConfigurationError, match="scheme"):
         Signal(sim, "Dev Gate")
     Signal(sim, "dev.axis1.gate")
-    with pytest.raises(KeyError, match="did you mean dev.axis1.gate"):
+    with pytest.raises(KeyError, match=r"did you mean dev\.axis1\.gate"):
         sim.trace.edges("dev.axis1.gat")
 
 

@@ -1,0 +1,1 @@
+"""Controller timing models: SimPy processes that drive and read signals, never FMUs."""

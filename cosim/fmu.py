@@ -1,0 +1,303 @@
+"""The FMU adapter: the one module that imports fmpy.
+
+:class:`Fmu` loads an FMI 2.0 or 3.0 co-simulation FMU, resolves variable names once, offers
+typed get/set by name, and advances the FMU to an integer tick: the step size is computed from
+integer time here, at the FMI boundary, and nowhere else. FMI errors become :class:`FmuError`
+carrying the FMU's own log messages. On FMI 3.0, early return and event mode are used when the
+FMU offers them, so :meth:`Fmu.advance_to` can stop exactly at an event inside a step.
+"""
+
+from __future__ import annotations
+
+import difflib
+import shutil
+import tempfile
+from collections import deque
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+from fmpy import extract, fmi2, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi3 import FMU3Slave
+
+from cosim.errors import ConfigurationError, FmuError
+from cosim.timebase import TimeBase
+
+Value = float | int | bool
+
+_STATUS = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
+
+
+class _Variable:
+    """A resolved variable: value reference plus typed accessors."""
+
+    __slots__ = ("causality", "get", "name", "set", "type", "unit", "variability", "vr")
+
+    def __init__(self, name: str, vr: int, type_: str, causality: str, variability: str, unit: str) -> None:
+        self.name = name
+        self.vr = vr
+        self.type = type_
+        self.causality = causality
+        self.variability = variability
+        self.unit = unit
+        self.get: Callable[[], Value] = lambda: 0
+        self.set: Callable[[Value], None] = lambda value: None
+
+
+class Fmu:
+    """One instance of a co-simulation FMU, instantiated and initialised at ``start``.
+
+    Parameters
+    ----------
+    path : path
+        The ``.fmu`` file.
+    timebase : TimeBase, optional
+        Resolution of the integer times given to :meth:`advance_to` (1 ns by default).
+    instance_name : str
+        Name used in log messages and errors.
+    parameters : mapping, optional
+        Start values of parameters and inputs, set before initialisation.
+    start : int
+        Start time [ticks].
+    logging : bool
+        Ask the FMU for debug logging (errors are always captured).
+
+    Examples
+    --------
+    >>> with Fmu("models/fmi3/Laser.fmu", parameters={"peak_power": 40.0}) as laser:  # doctest: +SKIP
+    ...     laser.set("enable", True)
+    ...     laser.advance_to(1_000_000)
+    ...     laser.get("energy")
+    """
+
+    def __init__(self, path: str | Path, *, timebase: TimeBase | None = None, instance_name: str = "fmu",
+                 parameters: Mapping[str, Value] | None = None, start: int = 0,
+                 logging: bool = False) -> None:
+        self.path = Path(path)
+        self.timebase = timebase or TimeBase()
+        self.instance_name = instance_name
+        self.log: deque[str] = deque(maxlen=200)
+        self.t = start
+        self.events = 0
+        self._unzipdir: str | None = None
+        self._fmu: Any = None
+        if not self.path.exists():
+            raise ConfigurationError(f"FMU file {self.path} does not exist")
+        try:
+            self.model = read_model_description(str(self.path))
+        except Exception as exc:  # fmpy raises plain exceptions for broken XML
+            raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
+        if self.model.coSimulation is None:
+            raise ConfigurationError(f"{self.path} is not a co-simulation FMU")
+        self.fmi_version = 3 if self.model.fmiVersion.startswith("3") else 2
+        self._unzipdir = tempfile.mkdtemp(prefix="cosim-fmu-")
+        extract(str(self.path), unzipdir=self._unzipdir)
+        cs = self.model.coSimulation
+        self.early_return = self.fmi_version == 3 and bool(cs.mightReturnEarlyFromDoStep)
+        self.event_mode = self.fmi_version == 3 and bool(cs.hasEventMode)
+        self.variables: dict[str, _Variable] = {}
+        self._instantiate(logging)
+        self._resolve()
+        self._call("initialise", self._initialise, dict(parameters or {}))
+
+    # -- setup ------------------------------------------------------------------------------
+    def _instantiate(self, logging: bool) -> None:
+        common = {
+            "guid": self.model.guid,
+            "unzipDirectory": self._unzipdir,
+            "modelIdentifier": self.model.coSimulation.modelIdentifier,
+            "instanceName": self.instance_name,
+        }
+        try:
+            if self.fmi_version == 2:
+                self._fmu = FMU2Slave(**common)
+                self._logger = fmi2CallbackLoggerTYPE(self._log_fmi2)
+                callbacks = fmi2CallbackFunctions()
+                callbacks.logger = self._logger
+                callbacks.allocateMemory = fmi2.defaultCallbacks.allocateMemory
+                callbacks.freeMemory = fmi2.defaultCallbacks.freeMemory
+                self._callbacks = callbacks
+                self._fmu.instantiate(callbacks=callbacks, loggingOn=logging)
+            else:
+                self._fmu = FMU3Slave(**common)
+                self._fmu.instantiate(loggingOn=logging, eventModeUsed=self.event_mode,
+                                      earlyReturnAllowed=self.early_return, logMessage=self._log_fmi3)
+        except Exception as exc:
+            self._cleanup()
+            raise FmuError(f"{self.instance_name}: instantiation of {self.path.name} failed: {exc}",
+                           self.log) from exc
+
+    def _log_fmi2(self, env: object, instance: bytes | None, status: int, category: bytes | None,
+                  message: bytes | None) -> None:
+        self._remember(status, category, message)
+
+    def _log_fmi3(self, env: object, status: int, category: bytes | None, message: bytes | None) -> None:
+        self._remember(status, category, message)
+
+    def _remember(self, status: int, category: bytes | None, message: bytes | None) -> None:
+        cat = category.decode(errors="replace") if category else ""
+        text = message.decode(errors="replace") if message else ""
+        self.log.append(f"[{_STATUS.get(status, status)}] {cat}: {text}")
+
+    def _resolve(self) -> None:
+        for sv in self.model.modelVariables:
+            unit = sv.unit or (sv.declaredType.unit if sv.declaredType is not None else "") or ""
+            var = _Variable(sv.name, sv.valueReference, sv.type, sv.causality, sv.variability, unit)
+            accessors = self._accessors(sv.type, [sv.valueReference])
+            if accessors is None:
+                continue
+            var.get, var.set = accessors
+            self.variables[sv.name] = var
+
+    def _accessors(self, type_: str, vr: list[int]) -> tuple[Callable[[], Value],
+                                                            Callable[[Value], None]] | None:
+        f = self._fmu
+        v2 = self.fmi_version == 2
+        if type_ in ("Real", "Float64"):
+            get_real = f.getReal if v2 else f.getFloat64
+            set_real = f.setReal if v2 else f.setFloat64
+            return (lambda: float(get_real(vr)[0])), (lambda value: set_real(vr, [float(value)]))
+        if type_ in ("Integer", "Int32", "Enumeration"):
+            get_int = f.getInteger if v2 else f.getInt32
+            set_int = f.setInteger if v2 else f.setInt32
+            return (lambda: int(get_int(vr)[0])), (lambda value: set_int(vr, [int(value)]))
+        if type_ == "Boolean":
+            return (lambda: bool(f.getBoolean(vr)[0])), (lambda value: f.setBoolean(vr, [bool(value)]))
+        return None
+
+    def _initialise(self, parameters: dict[str, Value]) -> None:
+        t0 = self.timebase.seconds(self.t)
+        for name, value in parameters.items():
+            self._check_value(self.variable(name), value)
+        if self.fmi_version == 2:
+            self._fmu.setupExperiment(startTime=t0)
+            for name, value in parameters.items():
+                self.variables[name].set(value)
+            self._fmu.enterInitializationMode()
+            self._fmu.exitInitializationMode()
+        else:
+            for name, value in parameters.items():
+                self.variables[name].set(value)
+            self._fmu.enterInitializationMode(startTime=t0)
+            self._fmu.exitInitializationMode()
+            if self.event_mode:
+                self._settle_events()
+                self._fmu.enterStepMode()
+
+    # -- access -----------------------------------------------------------------------------
+    def variable(self, name: str) -> _Variable:
+        """The resolved variable ``name``; unknown names raise with the closest matches."""
+        try:
+            return self.variables[name]
+        except KeyError:
+            close = difflib.get_close_matches(name, list(self.variables), n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise ConfigurationError(
+                f"{self.instance_name} ({self.path.name}) has no variable named {name!r}{hint}"
+            ) from None
+
+    @staticmethod
+    def _check_value(var: _Variable, value: Value) -> None:
+        if var.type == "Boolean" and not isinstance(value, bool | int):
+            raise ConfigurationError(f"{var.name} is Boolean; got {value!r}")
+        if var.type in ("Integer", "Int32") and (
+            (isinstance(value, float) and not value.is_integer()) or not isinstance(value, int | float)
+        ):
+            raise ConfigurationError(f"{var.name} is an integer variable; got {value!r}")
+
+    def get(self, name: str) -> Value:
+        """Current value of variable ``name`` (the FMU is not advanced; see the master)."""
+        var = self.variable(name)
+        value: Value = self._call(f"get {name}", var.get)
+        return value
+
+    def set(self, name: str, value: Value) -> None:
+        """Set variable ``name``; an FMU that rejects it raises :class:`FmuError` with its message."""
+        var = self.variable(name)
+        self._check_value(var, value)
+        self._call(f"set {name} = {value!r}", var.set, value)
+
+    def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
+        try:
+            return fn(*args)
+        except FMICallException as exc:
+            raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: {what} "
+                           f"failed ({exc})", self.log) from exc
+
+    # -- time -------------------------------------------------------------------------------
+    def advance_to(self, t: int) -> int:
+        """Advance the FMU to tick ``t``; returns the tick it reached.
+
+        With FMI 3.0 early return, the FMU may stop at an event before ``t``: the adapter then
+        handles the event (event mode when the FMU has it), steps on to the first whole tick at
+        or after the event instant, and returns that tick (< ``t``). Otherwise returns ``t``.
+        """
+        if t == self.t:
+            return t
+        if t < self.t:
+            raise FmuError(f"{self.instance_name} is at t={self.t} ticks and cannot go back to t={t}")
+        t_from = self.timebase.seconds(self.t)
+        h = self.timebase.seconds(t - self.t)
+        if self.fmi_version == 2:
+            self._call("doStep", self._fmu.doStep, t_from, h)
+            self.t = t
+            return t
+        event, terminate, early, t_last = self._call("doStep", self._fmu.doStep, t_from, h)
+        if terminate:
+            raise FmuError(f"{self.instance_name} asked to terminate at t={t_last} s", self.log)
+        if event and self.event_mode:
+            self._call("event mode", self._handle_event)
+        if not early:
+            self.t = t
+            return t
+        self.events += 1
+        t_event = min(max(self.timebase.ticks_from_seconds_ceil(t_last), self.t), t)
+        gap = self.timebase.seconds(t_event) - t_last
+        if gap > 0:
+            self._call("doStep", self._fmu.doStep, t_last, gap)
+        self.t = t_event
+        return t_event
+
+    def _handle_event(self) -> None:
+        self._fmu.enterEventMode()
+        self._settle_events()
+        self._fmu.enterStepMode()
+
+    def _settle_events(self) -> None:
+        for _ in range(100):
+            needed, terminate, *_rest = self._fmu.updateDiscreteStates()
+            if terminate:
+                raise FmuError(f"{self.instance_name} asked to terminate in event mode", self.log)
+            if not needed:
+                return
+        raise FmuError(f"{self.instance_name}: discrete states did not settle after 100 iterations", self.log)
+
+    # -- teardown ---------------------------------------------------------------------------
+    def close(self) -> None:
+        """Terminate and free the instance and remove its unzipped folder (idempotent)."""
+        fmu, self._fmu = self._fmu, None
+        if fmu is not None:
+            try:
+                fmu.terminate()
+            except FMICallException:
+                pass
+            finally:
+                fmu.freeInstance()
+        self._cleanup()
+
+    def _cleanup(self) -> None:
+        if self._unzipdir:
+            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            self._unzipdir = None
+
+    def __enter__(self) -> Fmu:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        self.close()
+

@@ -1,0 +1,55 @@
+"""The main job: build what is missing, run every bundled scenario, summarise, report.
+
+Each scenario writes its results into ``<out>/<scenario>/``; the job prints one summary table
+and writes ``<out>/summary.json`` and the static HTML report ``<out>/report.html``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from cosim.runner import Result, run_scenario
+from cosim.scenario import bundled, load
+
+
+def summary_table(results: list[Result]) -> str:
+    """One line per scenario: verdict, checks, key figures, wall time, real-time factor."""
+    head = f"{'scenario':<28} {'verdict':<7} {'checks':>7} {'wall s':>7} {'RTF':>8}  key figures"
+    lines = [head, "-" * len(head)]
+    for r in results:
+        figures = ", ".join(f"{k}={v['value']:.4g}{(' ' + v['unit']) if v['unit'] else ''}"
+                            for k, v in list(r.figures.items())[:3])
+        checks = f"{r.passed}/{len(r.checks)}"
+        lines.append(f"{r.scenario:<28} {r.verdict:<7} {checks:>7} {r.wall_time_s:>7.2f} "
+                     f"{r.real_time_factor:>8.1f}  {figures}")
+        if r.error:
+            lines.append(f"    error: {r.error.splitlines()[0]}")
+    return "\n".join(lines)
+
+
+def main_job(out: Path) -> int:
+    """Run every bundled scenario into ``out``; returns the exit status (1 if any check failed)."""
+    from cosim import fmubuild
+
+    for model in fmubuild.list_models():
+        for version in (2, 3):
+            fmubuild.ensure_fmu(model, version)
+    out.mkdir(parents=True, exist_ok=True)
+    results = []
+    for name in bundled():
+        print(f"running {name} ...", flush=True)
+        results.append(run_scenario(load(name), out=out / name, progress=True))
+    print()
+    print(summary_table(results))
+    (out / "summary.json").write_text(json.dumps([r.to_dict() for r in results], indent=1, default=float))
+    try:
+        from cosim.report import write_report
+    except ImportError:  # the HTML report arrives with the report module
+        pass
+    else:
+        print(f"report: {write_report(results, out)}")
+    bad = [r.scenario for r in results if r.verdict != "PASS"]
+    tail = f"; failed: {', '.join(bad)}" if bad else ""
+    print(f"\n{len(results) - len(bad)}/{len(results)} scenarios passed{tail}")
+    return 1 if bad else 0

@@ -1,0 +1,1 @@
+"""Python companions of the plant FMUs: closed forms and linear models (python-control)."""

@@ -1,0 +1,190 @@
+"""Running a scenario: parameters in, trace and verdict out.
+
+:func:`run_scenario` resolves the parameters, builds the simulation through the scenario's
+recipe, runs it, evaluates every declared check on the trace and writes the results folder:
+
+``result.json``        scenario, parameter values used, seed, each check, figures, verdict
+``trace.vcd``          every signal, for GTKWave and other waveform viewers
+``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv``
+``trace_meta.json``    resolution and each signal's kind, unit and description
+
+The trace is written even when the run fails half-way (nothing recorded is lost), and the
+result then carries the error.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cosim.errors import ConfigurationError, CosimError, ScenarioError
+from cosim.kernel import Simulation
+from cosim.scenario import Run, ScenarioFile, Values, where
+
+RESULT_VERSION = 1
+
+
+@dataclass
+class Result:
+    """Outcome of one scenario run (the content of ``result.json``)."""
+
+    scenario: str
+    parameters: dict[str, Any]
+    seed: int
+    until: int
+    checks: list[dict[str, Any]] = field(default_factory=list)
+    figures: dict[str, dict[str, Any]] = field(default_factory=dict)
+    error: str | None = None
+    error_kind: str | None = None
+    wall_time_s: float = 0.0
+    simulated_s: float = 0.0
+    out: Path | None = None
+
+    @property
+    def passed(self) -> int:
+        return sum(1 for c in self.checks if c["passed"])
+
+    @property
+    def failed(self) -> int:
+        return len(self.checks) - self.passed
+
+    @property
+    def verdict(self) -> str:
+        """``PASS`` (every check passed), ``FAIL`` (a check failed) or ``ERROR`` (the run broke)."""
+        if self.error is not None:
+            return "ERROR"
+        return "FAIL" if self.failed else "PASS"
+
+    @property
+    def real_time_factor(self) -> float:
+        return self.simulated_s / self.wall_time_s if self.wall_time_s > 0 else float("inf")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "result_version": RESULT_VERSION,
+            "scenario": self.scenario,
+            "verdict": self.verdict,
+            "parameters": self.parameters,
+            "seed": self.seed,
+            "until_ticks": self.until,
+            "summary": {"checks": len(self.checks), "passed": self.passed, "failed": self.failed},
+            "checks": self.checks,
+            "figures": self.figures,
+            "error": self.error,
+            "wall_time_s": round(self.wall_time_s, 4),
+            "simulated_s": self.simulated_s,
+            "real_time_factor": round(self.real_time_factor, 2),
+        }
+
+    def table(self) -> str:
+        """Plain-text check table for the terminal."""
+        lines = [f"scenario {self.scenario}: {self.verdict}  "
+                 f"({self.passed}/{len(self.checks)} checks passed, {self.simulated_s:g} s simulated "
+                 f"in {self.wall_time_s:.2f} s)"]
+        for check in self.checks:
+            lines.append(f"  {'PASS' if check['passed'] else 'FAIL'}  {check['name']}  "
+                         f"[{check['checked']} checked, {check['n_violations']} violations]")
+            for v in check["violations"][:3]:
+                lines.append(f"          at t={v['t_ns']} ns: value {v['value']} vs limit {v['limit']}"
+                             + (f" ({v['detail']})" if v.get("detail") else ""))
+        for name, fig in self.figures.items():
+            lines.append(f"  figure {name} = {fig['value']:.6g} {fig['unit']}".rstrip())
+        if self.error:
+            lines.append(f"  ERROR {self.error}")
+        return "\n".join(lines)
+
+
+def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = None, seed: int = 0,
+                 until: str | int | None = None, out: str | Path | None = None,
+                 formats: tuple[str, ...] = ("vcd", "parquet"), progress: bool = False) -> Result:
+    """Run ``scenario`` and write its results.
+
+    Parameters
+    ----------
+    scenario : ScenarioFile
+        From :func:`cosim.scenario.load`.
+    overrides : dict, optional
+        ``--set`` values, parsed and range-checked against the declared parameters.
+    seed : int
+        Seed of the simulation's random generator.
+    until : str or int, optional
+        End time (``"20 ms"`` or ticks); default: the scenario's ``UNTIL``.
+    out : path, optional
+        Results folder; nothing is written without it.
+    progress : bool
+        Show a progress bar for runs that take more than two seconds.
+
+    Raises
+    ------
+    ConfigurationError, ScenarioError
+        Bad parameters or a broken script (before anything runs).
+    """
+    values = scenario.resolve(overrides)
+    with Simulation(seed=seed) as sim:
+        end = _end_time(sim, until if until is not None else scenario.until)
+        sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
+        result = Result(scenario.name, values, seed, end)
+        run = Run(sim=sim, p=Values(values), until=end)
+        started = time.perf_counter()
+        bar = _progress_bar(sim, end) if progress else None
+        try:
+            scenario.function(run)
+            if sim.now < end:
+                sim.run(until=end)
+        except (ConfigurationError, ScenarioError) as exc:
+            result.error, result.error_kind = where(exc, scenario.path) + str(exc), "configuration"
+        except CosimError as exc:
+            result.error, result.error_kind = where(exc, scenario.path) + str(exc), "run"
+        except Exception as exc:  # a bug in a user's script: say where, keep the trace
+            result.error = where(exc, scenario.path) + f"{type(exc).__name__}: {exc}"
+            result.error_kind = "script"
+        finally:
+            if bar is not None:
+                bar.close()
+            sim.trace.end_t = sim.now
+        result.wall_time_s = time.perf_counter() - started
+        result.simulated_s = sim.timebase.seconds(sim.now)
+        if result.error is None:
+            _evaluate(run, result, scenario)
+        if out is not None:
+            folder = Path(out)
+            sim.trace.write(folder, formats=formats)
+            (folder / "result.json").write_text(json.dumps(result.to_dict(), indent=1, default=float))
+            result.out = folder
+    return result
+
+
+def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
+    try:
+        for spec in run.checks:
+            result.checks.append(spec.evaluate(run.sim.trace).to_dict())
+        for name, (value, unit) in run.figures.items():
+            number = value() if callable(value) else value
+            result.figures[name] = {"value": float(number), "unit": unit}
+    except (KeyError, CosimError) as exc:
+        result.error = where(exc, scenario.path) + f"while evaluating checks: {exc}"
+        result.error_kind = "configuration" if isinstance(exc, KeyError | ConfigurationError) else "run"
+
+
+def _end_time(sim: Simulation, until: str | int) -> int:
+    if isinstance(until, int):
+        return sim.timebase.check_ticks(until, name="until", minimum=1)
+    return sim.ticks(until, name="until")
+
+
+def _progress_bar(sim: Simulation, end: int) -> Any:
+    from tqdm import tqdm
+
+    total_ms = sim.timebase.seconds(end) * 1e3
+    bar = tqdm(total=round(total_ms, 3), delay=2.0, unit="ms", desc="simulated", leave=False,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total} ms [{elapsed}<{remaining}]")
+
+    def update(now: int) -> None:
+        bar.n = round(sim.timebase.seconds(now) * 1e3, 3)
+        bar.refresh()
+
+    sim.env.on_progress = update
+    return bar

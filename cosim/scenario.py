@@ -1,0 +1,278 @@
+"""Scenario scripts: linear recipes with declared parameters and checks.
+
+A scenario is a Python file (bundled ones live in :mod:`cosim.scenarios`) with
+
+* a module docstring (first line = the one-line description shown by ``cosim list``),
+* ``PARAMETERS``: a tuple of :class:`Param` (name, default, unit, allowed range, help),
+* ``UNTIL``: default end time (a string with a unit or ticks),
+* ``def scenario(run: Run) -> None``: create plants and controllers, connect signals, declare
+  checks and figures, in that order, top to bottom. It may call ``run.run_until(t)`` for
+  phases; whatever is left is run to ``UNTIL`` by the runner, then the checks are evaluated.
+
+Example (ten lines)::
+
+    \"\"\"Laser on for 1 ms at 40 % duty.\"\"\"
+    from cosim.scenario import Param, Run
+    PARAMETERS = (Param("pwm_on", 400, "clocks", (0, 65535), "on-time per period"),)
+    UNTIL = "2 ms"
+
+    def scenario(run: Run) -> None:
+        laser = run.plant("Laser", name="laser")
+        laser.set({"enable": True, "gate": True, "pwm_period": 1000, "pwm_on": run.p.pwm_on})
+        run.figure("energy_J", lambda: laser.read("energy"), "J")
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import Any, Protocol
+
+from cosim.errors import ConfigurationError, ScenarioError
+from cosim.fmu import Value
+from cosim.kernel import Simulation
+from cosim.master import Plant
+
+BUNDLED = Path(__file__).resolve().parent / "scenarios"
+
+
+@dataclass(frozen=True)
+class Param:
+    """A declared scenario parameter.
+
+    Parameters
+    ----------
+    name : str
+        Identifier used with ``--set NAME=VALUE``.
+    default : int, float, bool or str
+        Default value; its type is the parameter's type.
+    unit : str
+        Unit of the value (``""`` for counts and flags).
+    range : tuple, optional
+        ``(low, high)`` inclusive bounds for numbers, or a tuple of allowed values for strings.
+    help : str
+        One line for ``cosim params``.
+    """
+
+    name: str
+    default: int | float | bool | str
+    unit: str = ""
+    range: tuple[Any, ...] | None = None
+    help: str = ""
+
+    def allowed(self) -> str:
+        """The allowed range as text."""
+        if self.range is None:
+            return "any " + type(self.default).__name__
+        if isinstance(self.default, str):
+            return ", ".join(map(str, self.range))
+        low, high = self.range
+        return f"{low}..{high}" + (f" {self.unit}" if self.unit else "")
+
+    def parse(self, text: str | Value) -> int | float | bool | str:
+        """Convert and range-check a value (text from ``--set`` or a Python value)."""
+        kind = type(self.default)
+        try:
+            if kind is bool:
+                value: int | float | bool | str = (
+                    text if isinstance(text, bool) else str(text).lower() in ("1", "true", "on", "yes"))
+                if not isinstance(text, bool) and str(text).lower() not in (
+                        "0", "1", "true", "false", "on", "off", "yes", "no"):
+                    raise ValueError(text)
+            elif kind is int:
+                value = int(str(text), 0) if isinstance(text, str) else int(text)
+                if isinstance(text, float) and not text.is_integer():
+                    raise ValueError(text)
+            elif kind is float:
+                value = float(text)
+            else:
+                value = str(text)
+        except ValueError:
+            raise ConfigurationError(
+                f"parameter {self.name} = {text!r} is not a {kind.__name__} (allowed: {self.allowed()})"
+            ) from None
+        if self.range is not None:
+            ok = value in self.range if isinstance(self.default, str) else (
+                self.range[0] <= value <= self.range[1])
+            if not ok:
+                raise ConfigurationError.out_of_range(f"parameter {self.name}", value, self.allowed())
+        return value
+
+
+class Values:
+    """Attribute access to the resolved parameter values; unknown names name the declared ones."""
+
+    def __init__(self, values: Mapping[str, Any]) -> None:
+        self._values = dict(values)
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self._values[name]
+        except KeyError:
+            raise ScenarioError(
+                f"the scenario uses parameter {name!r}, which it does not declare in PARAMETERS "
+                f"(declared: {', '.join(self._values) or 'none'})"
+            ) from None
+
+    def as_dict(self) -> dict[str, Any]:
+        """All values, by name."""
+        return dict(self._values)
+
+
+class CheckSpec(Protocol):
+    """Anything with ``evaluate(trace) -> CheckResult`` (see :mod:`cosim.checks`)."""
+
+    def evaluate(self, trace: Any) -> Any: ...
+
+
+@dataclass
+class Run:
+    """What a scenario function gets: the simulation, its parameters, and ways to add things.
+
+    Attributes
+    ----------
+    sim : Simulation
+    p : Values
+        Parameter values (``run.p.pwm_on``).
+    until : int
+        End time [ticks].
+    """
+
+    sim: Simulation
+    p: Values
+    until: int
+    checks: list[CheckSpec] = field(default_factory=list)
+    figures: dict[str, tuple[Callable[[], float] | float, str]] = field(default_factory=dict)
+    plants: list[Plant] = field(default_factory=list)
+
+    def plant(self, model: str | Path, *, name: str, fmi_version: int = 3, preset: str | None = None,
+              parameters: Mapping[str, Value] | None = None) -> Plant:
+        """Add a plant FMU (bundled model name or ``.fmu`` path), optionally from a preset."""
+        values: dict[str, Value] = {}
+        if preset is not None:
+            from cosim.presets import load_preset
+
+            values.update(load_preset(preset))
+        values.update(parameters or {})
+        plant = Plant.load(self.sim, model, name=name, fmi_version=fmi_version, parameters=values)
+        self.plants.append(plant)
+        return plant
+
+    def check(self, spec: CheckSpec) -> None:
+        """Declare a check, evaluated on the trace after the run."""
+        self.checks.append(spec)
+
+    def figure(self, name: str, value: Callable[[], float] | float, unit: str = "") -> None:
+        """Declare a key figure for the summary (a callable is evaluated after the run)."""
+        self.figures[name] = (value, unit)
+
+    def run_until(self, t: int) -> None:
+        """Run the simulation to tick ``t`` (for scenarios with phases)."""
+        self.sim.run(until=t)
+
+
+@dataclass(frozen=True)
+class ScenarioFile:
+    """A loaded scenario script."""
+
+    name: str
+    path: Path
+    description: str
+    parameters: tuple[Param, ...]
+    until: str | int
+    function: Callable[[Run], None]
+
+    def resolve(self, overrides: Mapping[str, str | Value] | None = None) -> dict[str, Any]:
+        """Default parameter values with ``overrides`` parsed and range-checked."""
+        declared = {p.name: p for p in self.parameters}
+        values = {p.name: p.default for p in self.parameters}
+        for name, text in (overrides or {}).items():
+            if name not in declared:
+                raise ConfigurationError(
+                    f"scenario {self.name} has no parameter {name!r} "
+                    f"(its parameters: {', '.join(declared) or 'none'}; see `cosim params {self.name}`)"
+                )
+            values[name] = declared[name].parse(text)
+        return values
+
+
+def bundled() -> list[str]:
+    """Names of the bundled scenarios."""
+    return sorted(p.stem for p in BUNDLED.glob("*.py") if not p.stem.startswith("_"))
+
+
+def load(name_or_path: str | Path) -> ScenarioFile:
+    """Load a bundled scenario by name or a scenario script by path.
+
+    Raises
+    ------
+    ScenarioError
+        With file and line for a syntax error or a script that fails on import.
+    ConfigurationError
+        If no such scenario exists.
+    """
+    path = Path(name_or_path)
+    if path.suffix != ".py":
+        path = BUNDLED / f"{name_or_path}.py"
+        if not path.exists():
+            raise ConfigurationError(
+                f"no bundled scenario named {name_or_path!r} (bundled: {', '.join(bundled())}); "
+                "give a path to a .py file for your own"
+            )
+    if not path.exists():
+        raise ConfigurationError(f"scenario file {path} does not exist")
+    module = _import(path)
+    function = getattr(module, "scenario", None)
+    if not callable(function):
+        raise ScenarioError(f"{path}: defines no function `scenario(run)`")
+    doc = (module.__doc__ or "").strip()
+    params = tuple(getattr(module, "PARAMETERS", ()))
+    for p in params:
+        if not isinstance(p, Param):
+            raise ScenarioError(f"{path}: PARAMETERS must hold cosim.scenario.Param objects, got {p!r}")
+        p.parse(p.default)
+    return ScenarioFile(name=path.stem, path=path.resolve(), description=doc.splitlines()[0] if doc else "",
+                        parameters=params, until=getattr(module, "UNTIL", "10 ms"), function=function)
+
+
+def _import(path: Path) -> ModuleType:
+    source = path.read_text()
+    try:
+        code = compile(source, str(path), "exec")
+    except SyntaxError as exc:
+        line = (exc.text or "").rstrip()
+        raise ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}\n    {line}") from None
+    module = ModuleType(f"cosim_scenario_{path.stem}")
+    module.__file__ = str(path)
+    sys.modules[module.__name__] = module  # dataclasses and pickling look modules up here
+    try:
+        exec(code, module.__dict__)
+    except Exception as exc:
+        del sys.modules[module.__name__]
+        raise ScenarioError(where(exc, path) + f"{type(exc).__name__}: {exc}") from exc
+    return module
+
+
+def where(exc: BaseException, path: Path) -> str:
+    """``file:line: `` of the innermost frame of ``exc`` (or its causes) in the scenario ``path``.
+
+    SimPy re-raises a failed process's exception as a copy whose cause is the original, so the
+    chain of causes is searched too.
+    """
+    target = str(path.resolve())
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        location = ""
+        for frame, line in traceback.walk_tb(current.__traceback__):
+            if str(Path(frame.f_code.co_filename).resolve()) == target:
+                location = f"{path}:{line}: "
+        if location:
+            return location
+        current = current.__cause__ or current.__context__
+    return ""
