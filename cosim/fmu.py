@@ -9,6 +9,7 @@ FMU offers them, so :meth:`Fmu.advance_to` can stop exactly at an event inside a
 
 from __future__ import annotations
 
+import ctypes
 import difflib
 import shutil
 import tempfile
@@ -101,6 +102,7 @@ class Fmu:
         self._instantiate(logging)
         self._resolve()
         self._call("initialise", self._initialise, dict(parameters or {}))
+        self._prepare_step()
 
     # -- setup ------------------------------------------------------------------------------
     def _instantiate(self, logging: bool) -> None:
@@ -227,6 +229,67 @@ class Fmu:
                            f"failed ({exc})", self.log) from exc
 
     # -- time -------------------------------------------------------------------------------
+    # -- hot path ---------------------------------------------------------------------------
+    # doStep and batched reads call the FMU's ctypes functions directly with arguments prepared
+    # once (fmpy's wrappers build new ctypes objects on every call). Statuses are checked here.
+    def _raw(self, name: str) -> Any:
+        functions = getattr(self._fmu, "_functions", None)
+        return None if functions is None else functions.get(name)
+
+    def _prepare_step(self) -> None:
+        self._event = ctypes.c_bool()
+        self._terminate = ctypes.c_bool()
+        self._early = ctypes.c_bool()
+        self._last = ctypes.c_double()
+        do_step = self._raw(f"fmi{self.fmi_version}DoStep")
+        component = self._fmu.component
+        if do_step is None:
+            self._do_step = self._do_step_fmpy
+        elif self.fmi_version == 2:
+            self._do_step = lambda t_s, h_s: (do_step(component, t_s, h_s, 1), False, False, False, t_s + h_s)
+        else:
+            refs = (ctypes.byref(self._event), ctypes.byref(self._terminate), ctypes.byref(self._early),
+                    ctypes.byref(self._last))
+            self._do_step = lambda t_s, h_s: (do_step(component, t_s, h_s, True, *refs), self._event.value,
+                                              self._terminate.value, self._early.value, self._last.value)
+
+    def _do_step_fmpy(self, t_s: float, h_s: float) -> tuple[int, bool, bool, bool, float]:
+        if self.fmi_version == 2:
+            self._fmu.doStep(t_s, h_s)
+            return 0, False, False, False, t_s + h_s
+        event, terminate, early, last = self._fmu.doStep(t_s, h_s)
+        return 0, event, terminate, early, last
+
+    def _step(self, t_s: float, h_s: float) -> tuple[bool, bool, bool, float]:
+        try:
+            status, event, terminate, early, last = self._do_step(t_s, h_s)
+        except FMICallException as exc:
+            status, event, terminate, early, last = exc.status, False, False, False, t_s
+        if status > 1:
+            raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: doStep from {t_s!r} s "
+                           f"by {h_s!r} s failed with status {_STATUS.get(status, status)}", self.log)
+        return event, terminate, early, last
+
+    def reader(self, names: list[str]) -> Callable[[], list[Value]]:
+        """A function returning the current values of ``names`` (one FMI call when all are Float64)."""
+        variables = [self.variable(name) for name in names]
+        get = self._raw("fmi2GetReal" if self.fmi_version == 2 else "fmi3GetFloat64")
+        if get is None or not variables or any(v.type not in ("Real", "Float64") for v in variables):
+            return lambda: [self._call(f"get {v.name}", v.get) for v in variables]
+        n = len(variables)
+        vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
+        values = (ctypes.c_double * n)()
+        args = (self._fmu.component, vrs, n, values) + (() if self.fmi_version == 2 else (n,))
+
+        def read() -> list[Value]:
+            status = get(*args)
+            if status > 1:
+                raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: reading "
+                               f"{', '.join(names)} failed with status {_STATUS.get(status, status)}", self.log)
+            return list(values)
+
+        return read
+
     def advance_to(self, t: int) -> int:
         """Advance the FMU to tick ``t``; returns the tick it reached.
 
@@ -240,11 +303,10 @@ class Fmu:
             raise FmuError(f"{self.instance_name} is at t={self.t} ticks and cannot go back to t={t}")
         t_from = self.timebase.seconds(self.t)
         h = self.timebase.seconds(t - self.t)
+        event, terminate, early, t_last = self._step(t_from, h)
         if self.fmi_version == 2:
-            self._call("doStep", self._fmu.doStep, t_from, h)
             self.t = t
             return t
-        event, terminate, early, t_last = self._call("doStep", self._fmu.doStep, t_from, h)
         if terminate:
             raise FmuError(f"{self.instance_name} asked to terminate at t={t_last} s", self.log)
         if event and self.event_mode:
@@ -256,7 +318,7 @@ class Fmu:
         t_event = min(max(self.timebase.ticks_from_seconds_ceil(t_last), self.t), t)
         gap = self.timebase.seconds(t_event) - t_last
         if gap > 0:
-            self._call("doStep", self._fmu.doStep, t_last, gap)
+            self._step(t_last, gap)
         self.t = t_event
         return t_event
 

@@ -1,0 +1,105 @@
+"""The master: a plant is advanced only when it must be, and sampling never changes the result.
+
+Gate pattern used below (enable on throughout)::
+
+    gate   ____|‾‾‾‾‾‾‾‾‾‾‾‾|_______|‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|______
+           0  0.3ms       2.1ms   3.05ms            7.5ms   10ms
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+
+from cosim.controllers.scripted import play
+from cosim.errors import ConfigurationError, FmuError
+from cosim.kernel import Simulation
+from cosim.master import Plant
+from cosim.plants.laser import pwm_energy
+from cosim.signals import Signal
+from cosim.trace import Trace
+
+pytestmark = pytest.mark.fmu
+
+US = 1_000
+MS = 1_000_000
+GATE = [(300 * US, 1), (2_100 * US, 0), (3_050 * US, 1), (7_500 * US, 0)]
+
+
+def laser_run(*, fmi_version: int = 3, sample_ns: int | None = None, reads_ns: tuple[int, ...] = (),
+              seed: int = 0) -> tuple[float, int, Simulation]:
+    sim = Simulation(seed=seed)
+    gate = Signal(sim, "ctl.laser.gate")
+    laser = Plant.load(sim, "Laser", name="laser", fmi_version=fmi_version,
+                       parameters={"enable": True, "pwm_period": 1000, "pwm_on": 400})
+    laser.drive("gate", gate, convert=bool)
+    play(sim, [(t, {gate: v}) for t, v in GATE])
+    if sample_ns:
+        laser.record(["power", "energy"], period=sample_ns)
+    for t in reads_ns:
+        sim.call_at(t, 40, lambda: laser.read("energy"))
+    sim.run(until=10 * MS)
+    energy = float(laser.read("energy"))
+    sim.close()
+    return energy, laser.steps, sim
+
+
+def closed_form() -> float:
+    windows = [(Fraction(a, 10**9), Fraction(b, 10**9)) for (a, _), (b, _) in zip(GATE[::2], GATE[1::2], strict=True)]
+    energy, _ = pwm_energy(windows, period=1000, on=400, peak_power=40.0, tau_rise=100e-6, tau_fall=100e-6,
+                           t_end=Fraction(1, 100))
+    return energy
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_plant_steps_only_at_input_changes_and_reads(fmi_version: int) -> None:
+    energy, steps, _ = laser_run(fmi_version=fmi_version)
+    assert energy == pytest.approx(closed_form(), rel=1e-9)
+    assert steps == len(GATE) + 1  # one doStep per gate change, one for the final read
+
+
+@pytest.mark.parametrize("sample_ns", [None, 10 * US, 1 * US, 333_331])
+def test_result_does_not_depend_on_sampling(sample_ns: int | None) -> None:
+    energy, _, _ = laser_run(sample_ns=sample_ns)
+    assert energy == pytest.approx(closed_form(), rel=1e-12)
+
+
+def test_result_does_not_depend_on_random_extra_reads() -> None:
+    rng = __import__("numpy").random.default_rng(3)
+    reads = tuple(sorted({int(t) for t in rng.integers(1, 10 * MS, size=300)}))
+    energy, steps, _ = laser_run(reads_ns=reads)
+    assert steps >= len(reads)
+    assert energy == pytest.approx(closed_form(), rel=1e-12)
+
+
+def test_samples_land_on_k_times_period() -> None:
+    _, _, sim = laser_run(sample_ns=250 * US)
+    t, power = sim.trace.edges("laser.power")
+    assert t.tolist() == [k * 250 * US for k in range(40)]  # [0, until): nothing runs at until itself
+    assert power[0] == 0.0 and power.max() > 10.0
+
+
+def test_unknown_variable_names_the_plant_and_suggests() -> None:
+    with Simulation() as sim:
+        laser = Plant.load(sim, "Laser", name="laser")
+        unknown = r"laser \(Laser\.fmu\) has no variable named 'gat'; did you mean gate"
+        with pytest.raises(ConfigurationError, match=unknown):
+            laser.drive("gat", Signal(sim, "ctl.gate"))
+        with pytest.raises(ConfigurationError, match=r"laser\.energy is an output, not an input"):
+            laser.drive("energy", Signal(sim, "ctl.x"))
+
+
+def test_fmu_error_mid_run_raises_with_its_message_and_keeps_the_trace(tmp_path: Path) -> None:
+    sim = Simulation()
+    period = Signal(sim, "ctl.laser.pwm_period", kind="int", initial=1000)
+    laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "gate": True, "pwm_on": 400})
+    laser.drive("pwm_period", period, convert=int)
+    play(sim, [(1 * MS, {period: 500}), (2 * MS, {period: -3})])
+    with pytest.raises(FmuError) as info:
+        sim.run(until=5 * MS, out=tmp_path / "out")
+    assert "input pwm_period = -3 is not allowed (allowed: >= 0)" in str(info.value)
+    trace = Trace.load(tmp_path / "out")
+    t, v = trace.edges("ctl.laser.pwm_period")
+    assert t.tolist() == [0, 1 * MS, 2 * MS] and v.tolist() == [1000, 500, -3]
