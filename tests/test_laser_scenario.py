@@ -45,3 +45,13 @@ def test_out_of_range_parameter_exits_2_naming_it(tmp_path: Path, capsys: pytest
     status, _ = run(tmp_path, "--set", "pwm_on=70000")
     assert status == 2
     assert "parameter pwm_on = 70000 is not allowed (allowed: 0..65535 clocks)" in capsys.readouterr().err
+
+
+def test_unknown_fmu_variable_in_a_script_names_file_and_line(tmp_path: Path,
+                                                                capsys: pytest.CaptureFixture[str]) -> None:
+    script = tmp_path / "badvar.py"
+    script.write_text('"""Bad variable."""\nfrom cosim.signals import Signal\nPARAMETERS = ()\nUNTIL = "1 ms"\n\n\n'
+                      'def scenario(run):\n    laser = run.plant("Laser", name="laser")\n'
+                      '    laser.drive("gat", Signal(run.sim, "ctl.gate"))\n')
+    assert main(["run", str(script), "--out", str(tmp_path / "out")]) == 2
+    assert f"{script}:9: laser (Laser.fmu) has no variable named 'gat'; did you mean gate?" in capsys.readouterr().out
