@@ -1,0 +1,38 @@
+"""Sweep speed-up on Dask: the same 200-run sweep with 1 and with 2 local workers.
+
+Prints both wall times, the speed-up and whether the two tables are identical (they must be).
+Run::
+
+    .venv/bin/python bench/bench_sweep.py [--runs 200] [--scenario laser_pwm]
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import pandas as pd
+
+from cosim.sweep import plan, sweep
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=200)
+    parser.add_argument("--scenario", default="laser_pwm")
+    args = parser.parse_args()
+    runs = plan(args.scenario, random={"pwm_on": ("0", "1000")}, samples=args.runs, seed=1)
+    tables = {}
+    for workers in (1, 2):
+        tables[workers] = sweep(args.scenario, runs, workers=workers, progress=False)
+        attrs = tables[workers].attrs
+        print(f"  {workers} worker(s): {attrs['wall_time_s']:7.2f} s for {len(runs)} runs "
+              f"(of which {attrs['startup_s']:.2f} s starting the cluster)")
+    pd.testing.assert_frame_equal(tables[1], tables[2])
+    one, two = tables[1].attrs, tables[2].attrs
+    print(f"  speed-up 2 vs 1 workers: {one['wall_time_s'] / two['wall_time_s']:.2f}x in all, "
+          f"{(one['wall_time_s'] - one['startup_s']) / (two['wall_time_s'] - two['startup_s']):.2f}x once "
+          f"the cluster is up (target >= 1.6); tables identical")
+
+
+if __name__ == "__main__":
+    main()
