@@ -6,10 +6,9 @@ and writes ``<out>/summary.json`` and the static HTML report ``<out>/report.html
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from cosim.runner import Result, run_scenario
+from cosim.runner import Result, run_scenario, to_json
 from cosim.scenario import bundled, load
 
 
@@ -42,7 +41,7 @@ def main_job(out: Path) -> int:
         results.append(run_scenario(load(name), out=out / name, progress=True))
     print()
     print(summary_table(results))
-    (out / "summary.json").write_text(json.dumps([r.to_dict() for r in results], indent=1, default=float))
+    (out / "summary.json").write_text(to_json([r.to_dict() for r in results]))
     try:
         from cosim.report import write_report
     except ImportError:  # the HTML report arrives with the report module

@@ -15,6 +15,7 @@ result then carries the error.
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -97,6 +98,24 @@ class Result:
         return "\n".join(lines)
 
 
+def _plain(value: Any) -> Any:
+    """JSON-safe copy: numpy scalars to Python, non-finite floats to the strings "inf", "-inf", "nan"."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, str | bytes):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    return value
+
+
+def to_json(data: Any) -> str:
+    """Strict JSON (no NaN/Infinity literals) of a result dict, readable by any JSON parser."""
+    return json.dumps(_plain(data), indent=1, allow_nan=False)
+
+
 def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = None, seed: int = 0,
                  until: str | int | None = None, out: str | Path | None = None,
                  formats: tuple[str, ...] = ("vcd", "parquet"), progress: bool = False) -> Result:
@@ -152,7 +171,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         if out is not None:
             folder = Path(out)
             sim.trace.write(folder, formats=formats)
-            (folder / "result.json").write_text(json.dumps(result.to_dict(), indent=1, default=float))
+            (folder / "result.json").write_text(to_json(result.to_dict()))
             result.out = folder
     return result
 

@@ -1,0 +1,239 @@
+"""What every check shares: naming, the empty-signal rule, reading signals, checking parameters.
+
+A check is a frozen dataclass whose :meth:`Check.evaluate` reads a :class:`~cosim.trace.Trace`
+and nothing else. Parameters are integer ticks of the trace's time base; results report instants
+and durations in ns (see :class:`Clock`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from decimal import Decimal, InvalidOperation
+from fractions import Fraction
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from cosim.checks.result import CheckResult, Number, Violation
+from cosim.errors import ConfigurationError
+from cosim.timebase import TimeBase
+
+if TYPE_CHECKING:
+    from cosim.trace import Trace
+
+Ints = npt.NDArray[np.int64]
+Floats = npt.NDArray[np.float64]
+VALUE_KINDS = ("bit", "int", "real")
+
+
+@dataclass(frozen=True)
+class Clock:
+    """Ticks of a trace's time base as the nanoseconds a result reports.
+
+    With the default 1 ns resolution a tick is a nanosecond. With a coarser resolution that is a
+    whole number of ns the conversion is exact; with a finer one (ps) instants are rounded down to
+    whole ns and durations are given as float ns.
+    """
+
+    timebase: TimeBase
+
+    @property
+    def ns_per_tick(self) -> Fraction:
+        return self.timebase.resolution_s * 10**9
+
+    def t_ns(self, ticks: int | np.integer) -> int:
+        """An instant [ticks] in whole ns (rounded down if the resolution is finer than 1 ns)."""
+        exact = int(ticks) * self.ns_per_tick
+        return exact.numerator // exact.denominator
+
+    def ns(self, ticks: int | np.integer) -> Number:
+        """A duration [ticks] in ns: an int when exact, else a float."""
+        exact = int(ticks) * self.ns_per_tick
+        return exact.numerator if exact.denominator == 1 else float(exact)
+
+
+@dataclass
+class Findings:
+    """What a check found, before the common rules (empty signal, verdict) are applied."""
+
+    signal: str
+    checked: int = 0
+    n_violations: int = 0
+    violations: list[Violation] = field(default_factory=list)
+    measured: dict[str, Number] = field(default_factory=dict)
+    description: str = ""
+    empty_detail: str = ""
+
+
+@dataclass(frozen=True)
+class Check:
+    """Base of all check specs: the keyword-only options every check has.
+
+    Parameters
+    ----------
+    name : str, optional
+        Name in reports; default ``Type(signal)``.
+    allow_empty : bool
+        Pass when there was nothing to check. By default a check that examined nothing fails:
+        a pass must mean everything was checked.
+    """
+
+    name: str | None = field(default=None, kw_only=True)
+    allow_empty: bool = field(default=False, kw_only=True)
+
+    @property
+    def main_signal(self) -> str:
+        """The signal named in the default name and in results."""
+        return str(getattr(self, "signal", ""))
+
+    @property
+    def label(self) -> str:
+        """The name used in results and error messages."""
+        return self.name or f"{type(self).__name__}({self.main_signal})"
+
+    def evaluate(self, trace: Trace) -> CheckResult:
+        """Evaluate the check on ``trace``.
+
+        Raises
+        ------
+        KeyError
+            A signal is not in the trace (the message names it and suggests close names).
+        ConfigurationError
+            A signal is of the wrong kind for this check.
+        """
+        try:
+            found = self.examine(trace, Clock(trace.timebase))
+        except KeyError as exc:
+            raise KeyError(f"{self.label}: {exc.args[0] if exc.args else exc}") from None
+        violations = sorted(found.violations, key=lambda v: v.t_ns)
+        n_violations = found.n_violations
+        if found.checked == 0 and not self.allow_empty:
+            detail = found.empty_detail or f"signal {found.signal} had no data: nothing was checked"
+            violations, n_violations = [Violation(0, 0, ">= 1 item checked", detail)], 1
+        return CheckResult(
+            name=self.label, passed=n_violations == 0, checked=found.checked, n_violations=n_violations,
+            violations=tuple(violations), measured=dict(found.measured), signal=found.signal,
+            description=found.description,
+        )
+
+    def examine(self, trace: Trace, clock: Clock) -> Findings:
+        """Find the violations (each check implements this)."""
+        raise NotImplementedError
+
+    @property
+    def where(self) -> str:
+        """Location prefix for configuration errors."""
+        return self.label
+
+
+# -- reading signals ---------------------------------------------------------------------------
+def _require_kind(trace: Trace, name: str, kinds: tuple[str, ...], check: Check) -> None:
+    info = trace.info.get(name)
+    if info is not None and info.kind not in kinds:
+        raise ConfigurationError(
+            f"{check.label}: signal {name} is a {info.kind} signal; this check needs a "
+            f"{' or '.join(kinds)} signal"
+        )
+
+
+def pulse_times(trace: Trace, name: str, check: Check) -> tuple[Ints, npt.NDArray[np.int8]]:
+    """``(t, dir)`` of every pulse of a pulse train (an unknown name raises KeyError)."""
+    _require_kind(trace, name, ("pulse",), check)
+    return trace.pulses(name)
+
+
+def records(trace: Trace, name: str, check: Check) -> tuple[Ints, Floats]:
+    """``(t, value)`` of a bit/int/real signal: every recorded change or sample."""
+    _require_kind(trace, name, VALUE_KINDS, check)
+    return trace.edges(name)
+
+
+def changes(t: Ints, v: Floats) -> tuple[Ints, Floats]:
+    """The records where the value differs from the one before (the first record is the initial value)."""
+    moved = np.flatnonzero(v[1:] != v[:-1]) + 1
+    return t[moved], v[moved]
+
+
+def held_index(t_records: Ints, t_query: Ints) -> Ints:
+    """Index of the record holding the value at each query instant (-1 before the first record).
+
+    A record at exactly the query instant counts: the value is the one after it.
+    """
+    return np.searchsorted(t_records, t_query, side="right").astype(np.int64) - 1
+
+
+def signed_position(direction: npt.NDArray[np.int8]) -> Ints:
+    """Signed pulse count after each pulse (dir 1 = +1, dir 0 = -1)."""
+    return np.cumsum(direction.astype(np.int64) * 2 - 1)
+
+
+def trace_end(trace: Trace, *times: Ints) -> int:
+    """The end of the trace: its recorded end or the last recorded instant, whichever is later."""
+    last = [int(t[-1]) for t in times if t.size]
+    return max([trace.end_t, *last])
+
+
+# -- checking parameters -----------------------------------------------------------------------
+class Located(Protocol):
+    """Anything that can say where a bad parameter is (a check or a reference)."""
+
+    @property
+    def where(self) -> str: ...
+
+
+def require_ticks(check: Located, name: str, value: object, *, minimum: int | None = 0) -> None:
+    """An integer tick count (not a float), at least ``minimum``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ConfigurationError.out_of_range(name, value, "an integer number of ticks", where=check.where)
+    if minimum is not None and value < minimum:
+        raise ConfigurationError.out_of_range(name, value, f">= {minimum} ticks", where=check.where)
+
+
+def require_int(check: Located, name: str, value: object, *, minimum: int | None = None,
+                allowed: tuple[int, ...] | None = None) -> None:
+    """An integer (counts, levels), optionally at least ``minimum`` or one of ``allowed``."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise ConfigurationError.out_of_range(name, value, "an integer", where=check.where)
+    if minimum is not None and value < minimum:
+        raise ConfigurationError.out_of_range(name, value, f">= {minimum}", where=check.where)
+    if allowed is not None and value not in allowed:
+        raise ConfigurationError.out_of_range(name, value, ", ".join(map(str, allowed)), where=check.where)
+
+
+def require_number(check: Located, name: str, value: object) -> float:
+    """A finite real number (bounds, thresholds, expected values)."""
+    if isinstance(value, bool) or not isinstance(value, int | float | Fraction | np.integer | np.floating):
+        raise ConfigurationError.out_of_range(name, value, "a finite number", where=check.where)
+    if not np.isfinite(float(value)):
+        raise ConfigurationError.out_of_range(name, value, "a finite number", where=check.where)
+    return float(value)
+
+
+def exact_positive(check: Located, name: str, value: object) -> Fraction:
+    """A positive number as an exact Fraction (a float is taken as the decimal it prints as)."""
+    require_number(check, name, value)
+    try:
+        if isinstance(value, Fraction):
+            exact = value
+        elif isinstance(value, int | np.integer):
+            exact = Fraction(int(value))
+        else:
+            exact = Fraction(Decimal(str(value)))
+    except (InvalidOperation, ValueError):  # pragma: no cover - require_number lets only numbers through
+        raise ConfigurationError.out_of_range(name, value, "a positive number", where=check.where) from None
+    if exact <= 0:
+        raise ConfigurationError.out_of_range(name, value, "> 0", where=check.where)
+    return exact
+
+
+def as_number(x: float | np.integer | np.floating) -> Number:
+    """A value as an int when it is whole (counts, levels), else a float."""
+    f = float(x)
+    return int(f) if f.is_integer() else f
+
+
+def fmt(x: Number | np.integer | np.floating) -> str:
+    """A number for a detail line: integers without a decimal point."""
+    f = float(x)
+    return str(int(f)) if f.is_integer() else f"{f:g}"

@@ -1,0 +1,116 @@
+"""Direction setup time: the direction output is steady and right before every step pulse.
+
+Polarity (the default): direction level 1 = positive = pulse ``dir`` 1, as a
+:class:`~cosim.signals.PulseTrain` counts it. Hardware with the opposite wiring sets
+``positive_level=0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cosim.checks.base import (
+    Check,
+    Clock,
+    Findings,
+    changes,
+    fmt,
+    held_index,
+    pulse_times,
+    records,
+    require_int,
+    require_ticks,
+)
+from cosim.checks.result import MAX_REPORTED, Violation
+
+if TYPE_CHECKING:
+    from cosim.trace import Trace
+
+
+@dataclass(frozen=True)
+class DirectionSetup(Check):
+    """The direction signal holds its level for at least ``setup`` before each step pulse, and agrees with it.
+
+    Parameters
+    ----------
+    step : str
+        The step pulse train, e.g. ``pokeys.x.step``.
+    direction : str
+        The direction output, a bit signal, e.g. ``pokeys.x.dir``.
+    setup : int
+        Shortest allowed time from the last direction change to a pulse [ticks], >= 0.
+    positive_level : {1, 0}
+        The direction level that means a positive pulse (``dir`` 1). Default 1.
+
+    Notes
+    -----
+    The first record of the direction signal is its initial value, held since before the run: it
+    is not a change. A change at the same tick as a pulse counts as 0 ns before it.
+
+    One violation per offending pulse, at the pulse's ``t_ns``:
+
+    * setup too short: ``value`` = time since the last direction change [ns], ``limit`` = setup [ns];
+    * wrong direction only: ``value`` = the direction level, ``limit`` = the level the pulse needed;
+    * no direction value yet (pulse before the first record): ``value`` 0, ``limit`` = setup [ns].
+
+    Measured: ``min_setup_ns`` (over pulses with a change before them), ``setup_violations``,
+    ``direction_mismatches``.
+    """
+
+    step: str
+    direction: str
+    setup: int
+    positive_level: int = 1
+
+    def __post_init__(self) -> None:
+        require_ticks(self, "setup", self.setup, minimum=0)
+        require_int(self, "positive_level", self.positive_level, allowed=(0, 1))
+
+    @property
+    def main_signal(self) -> str:
+        return self.step
+
+    def examine(self, trace: Trace, clock: Clock) -> Findings:
+        t, d = pulse_times(trace, self.step, self)
+        te, ve = records(trace, self.direction, self)
+        level_at = held_index(te, t)
+        undefined = level_at < 0
+        level = (ve[np.maximum(level_at, 0)] != 0).astype(np.int8)
+        wanted = level if self.positive_level == 1 else 1 - level  # the pulse dir this level means
+        mismatch = ~undefined & (d != wanted)
+        ct, _ = changes(te, ve)
+        change_at = held_index(ct, t)
+        changed = change_at >= 0
+        age = t - ct[np.maximum(change_at, 0)] if ct.size else np.zeros_like(t)
+        short = changed & (age < self.setup)
+        bad = np.flatnonzero(undefined | short | mismatch)
+
+        setup_ns = clock.ns(self.setup)
+        found = Findings(self.step, checked=t.size, n_violations=bad.size,
+                         description=f"{self.direction} steady for at least {fmt(setup_ns)} ns before each "
+                                     f"{self.step} pulse and agreeing with it (level {self.positive_level} = dir 1)")
+        for i in bad[:MAX_REPORTED]:
+            found.violations.append(self._violation(i, t, d, level, age, undefined, short, mismatch, clock))
+        if changed.any():
+            found.measured["min_setup_ns"] = clock.ns(age[changed].min())
+        found.measured["setup_violations"] = int(np.count_nonzero(short | undefined))
+        found.measured["direction_mismatches"] = int(np.count_nonzero(mismatch))
+        return found
+
+    def _violation(self, i: int, t: np.ndarray, d: np.ndarray, level: np.ndarray, age: np.ndarray,
+                   undefined: np.ndarray, short: np.ndarray, mismatch: np.ndarray, clock: Clock) -> Violation:
+        t_ns, setup_ns = clock.t_ns(t[i]), clock.ns(self.setup)
+        if undefined[i]:
+            return Violation(t_ns, 0, setup_ns, f"pulse {i}: {self.direction} has no value yet")
+        needed = int(d[i]) if self.positive_level == 1 else 1 - int(d[i])
+        wrong = f"; pulse dir {d[i]} needs level {needed}, level is {level[i]}" if mismatch[i] else ""
+        if short[i]:
+            since = clock.ns(age[i])
+            changed_at = clock.t_ns(t[i] - age[i])
+            return Violation(t_ns, since, setup_ns,
+                             f"pulse {i}: {self.direction} changed to {level[i]} at "
+                             f"{changed_at} ns, only {fmt(since)} ns before{wrong}")
+        return Violation(t_ns, int(level[i]), needed, f"pulse {i}: dir {d[i]} but {self.direction} is {level[i]}")

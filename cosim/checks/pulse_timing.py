@@ -1,0 +1,211 @@
+"""Pulse-train timing: minimum spacing, maximum rate, pulses per time slot.
+
+All three read the materialised pulse instants of a pulse train (:meth:`Trace.pulses`) and work on
+whole arrays at once: no Python loop per pulse. Rates are compared in exact integer arithmetic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from cosim.checks.base import Check, Clock, Findings, exact_positive, fmt, pulse_times, require_int, require_ticks
+from cosim.checks.result import MAX_REPORTED, Number, Violation
+
+if TYPE_CHECKING:
+    from cosim.trace import Trace
+
+
+def _rate_hz(pulses: int, ticks: int, clock: Clock) -> float:
+    """``pulses`` per ``ticks`` as a rate [Hz] (inf for zero ticks); for reports only."""
+    if ticks == 0:
+        return float("inf")
+    return float(pulses * clock.timebase.ticks_per_second / ticks)
+
+
+def _number(x: Fraction) -> Number:
+    return x.numerator if x.denominator == 1 else float(x)
+
+
+@dataclass(frozen=True)
+class MinPulseSpacing(Check):
+    """Consecutive pulses are at least ``min_spacing`` apart.
+
+    Parameters
+    ----------
+    signal : str
+        A pulse train, e.g. ``pokeys.x.step``.
+    min_spacing : int
+        Smallest allowed time from one pulse to the next [ticks], >= 1.
+
+    Notes
+    -----
+    One violation per pulse that comes too early: ``t_ns`` is that pulse, ``value`` the spacing
+    to the pulse before it [ns], ``limit`` the minimum spacing [ns]. Measured: ``min_spacing_ns``.
+
+    Examples
+    --------
+    >>> from cosim.trace import Trace
+    >>> trace = Trace()
+    >>> trace.declare("dev.x.step", "pulse")
+    >>> for t in (0, 1000, 1400, 2400):
+    ...     trace.record_pulse("dev.x.step", t, 1)
+    >>> result = MinPulseSpacing("dev.x.step", 500).evaluate(trace)
+    >>> result.passed, [(v.t_ns, v.value, v.limit) for v in result.violations]
+    (False, [(1400, 400, 500)])
+    """
+
+    signal: str
+    min_spacing: int
+
+    def __post_init__(self) -> None:
+        require_ticks(self, "min_spacing", self.min_spacing, minimum=1)
+
+    def examine(self, trace: Trace, clock: Clock) -> Findings:
+        t, _ = pulse_times(trace, self.signal, self)
+        gaps = np.diff(t)
+        bad = np.flatnonzero(gaps < self.min_spacing)
+        limit = clock.ns(self.min_spacing)
+        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
+                         description=f"{self.signal}: pulses at least {limit} ns apart")
+        for i in bad[:MAX_REPORTED]:
+            gap = clock.ns(gaps[i])
+            found.violations.append(Violation(
+                clock.t_ns(t[i + 1]), gap, limit,
+                f"pulse {i + 1} only {fmt(gap)} ns after pulse {i} at {clock.t_ns(t[i])} ns"))
+        if gaps.size:
+            found.measured["min_spacing_ns"] = clock.ns(gaps.min())
+        return found
+
+
+@dataclass(frozen=True)
+class MaxPulseRate(Check):
+    """The pulse rate never exceeds ``max_rate_hz``.
+
+    Parameters
+    ----------
+    signal : str
+        A pulse train.
+    max_rate_hz : int, float or Fraction
+        Highest allowed rate [Hz] (> 0). A float is taken as the decimal it prints as.
+    window : int, optional
+        Without it, the *instantaneous* rate (1 / spacing of consecutive pulses) is checked, exactly:
+        ``spacing * max_rate_hz >= ticks_per_second``. With it [ticks], the *average* rate over every
+        window ``[t, t + window)`` that starts at a pulse is checked: it may hold at most
+        ``floor(max_rate_hz * window)`` pulses.
+
+    Notes
+    -----
+    One violation per offending pulse (instantaneous: the pulse that came too early; windowed: the
+    pulse that starts an overfull window). ``value`` is the rate [Hz] (``inf`` for two pulses at
+    the same tick), ``limit`` is ``max_rate_hz``. Measured: ``max_rate_hz`` (and, with a window,
+    ``max_pulses_per_window``).
+    """
+
+    signal: str
+    max_rate_hz: int | float | Fraction
+    window: int | None = None
+
+    def __post_init__(self) -> None:
+        exact_positive(self, "max_rate_hz", self.max_rate_hz)
+        if self.window is not None:
+            require_ticks(self, "window", self.window, minimum=1)
+
+    def examine(self, trace: Trace, clock: Clock) -> Findings:
+        t, _ = pulse_times(trace, self.signal, self)
+        rate = exact_positive(self, "max_rate_hz", self.max_rate_hz)
+        limit = _number(rate)
+        if self.window is None:
+            return self._instantaneous(t, rate, limit, clock)
+        return self._windowed(t, rate, limit, self.window, clock)
+
+    def _instantaneous(self, t: np.ndarray, rate: Fraction, limit: Number, clock: Clock) -> Findings:
+        # spacing * rate >= ticks_per_second  <=>  spacing >= ceil(ticks_per_second / rate) for integer spacing
+        bound = clock.timebase.ticks_per_second / rate
+        min_gap = -((-bound.numerator) // bound.denominator)
+        gaps = np.diff(t)
+        bad = np.flatnonzero(gaps < min_gap)
+        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
+                         description=f"{self.signal}: instantaneous pulse rate at most {fmt(limit)} Hz")
+        for i in bad[:MAX_REPORTED]:
+            found.violations.append(Violation(
+                clock.t_ns(t[i + 1]), _rate_hz(1, int(gaps[i]), clock), limit,
+                f"pulse {i + 1} {fmt(clock.ns(gaps[i]))} ns after the one before "
+                f"(at least {fmt(clock.ns(min_gap))} ns needed)"))
+        if gaps.size:
+            found.measured["max_rate_hz"] = _rate_hz(1, int(gaps.min()), clock)
+        return found
+
+    def _windowed(self, t: np.ndarray, rate: Fraction, limit: Number, window: int, clock: Clock) -> Findings:
+        allowed = rate * window * clock.timebase.resolution_s
+        most = allowed.numerator // allowed.denominator
+        counts = np.searchsorted(t, t + window, side="left") - np.arange(t.size)
+        bad = np.flatnonzero(counts > most)
+        w_ns = clock.ns(window)
+        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
+                         description=f"{self.signal}: pulse rate over any {fmt(w_ns)} ns at most {fmt(limit)} Hz "
+                                     f"({most} pulses)")
+        for i in bad[:MAX_REPORTED]:
+            start = clock.t_ns(t[i])
+            found.violations.append(Violation(
+                start, _rate_hz(int(counts[i]), window, clock), limit,
+                f"{counts[i]} pulses in [{start}, {start + w_ns}) ns, at most {most} allowed"))
+        if counts.size:
+            found.measured["max_rate_hz"] = _rate_hz(int(counts.max()), window, clock)
+            found.measured["max_pulses_per_window"] = int(counts.max())
+        return found
+
+
+@dataclass(frozen=True)
+class PulsesPerWindow(Check):
+    """At most ``max_count`` pulses in each aligned window (e.g. 25 per 1 ms slot).
+
+    Parameters
+    ----------
+    signal : str
+        A pulse train.
+    max_count : int
+        Most pulses allowed in one window (>= 0).
+    window : int
+        Window length [ticks], >= 1.
+    start : int
+        Start of window 0 [ticks]; windows are ``[start + k*window, start + (k+1)*window)`` for
+        every integer k (negative k for pulses before ``start``), so every pulse is counted.
+
+    Notes
+    -----
+    One violation per overfull window: ``t_ns`` is its start, ``value`` its pulse count, ``limit``
+    ``max_count``. Measured: ``max_pulses_per_window`` and ``windows_with_pulses``.
+    """
+
+    signal: str
+    max_count: int
+    window: int
+    start: int = 0
+
+    def __post_init__(self) -> None:
+        require_int(self, "max_count", self.max_count, minimum=0)
+        require_ticks(self, "window", self.window, minimum=1)
+        require_ticks(self, "start", self.start, minimum=None)
+
+    def examine(self, trace: Trace, clock: Clock) -> Findings:
+        t, _ = pulse_times(trace, self.signal, self)
+        k = (t - self.start) // self.window
+        first = np.flatnonzero(np.diff(k, prepend=k[:1] - 1)) if k.size else np.empty(0, dtype=np.int64)
+        counts = np.diff(np.append(first, k.size))
+        bad = np.flatnonzero(counts > self.max_count)
+        w_ns = clock.ns(self.window)
+        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
+                         description=f"{self.signal}: at most {self.max_count} pulses per {fmt(w_ns)} ns window")
+        for i in bad[:MAX_REPORTED]:
+            begin = self.start + int(k[first[i]]) * self.window
+            found.violations.append(Violation(
+                clock.t_ns(begin), int(counts[i]), self.max_count,
+                f"{counts[i]} pulses in [{clock.t_ns(begin)}, {clock.t_ns(begin + self.window)}) ns"))
+        if counts.size:
+            found.measured["max_pulses_per_window"] = int(counts.max())
+            found.measured["windows_with_pulses"] = int(counts.size)
+        return found

@@ -1,0 +1,127 @@
+"""What a timing check reports: the verdict, what was checked, the first violations, key figures.
+
+The runner stores :meth:`CheckResult.to_dict` in ``result.json``; its shape is fixed::
+
+    {"name": str, "passed": bool, "checked": int, "n_violations": int,
+     "violations": [{"t_ns": int, "value": number, "limit": number | str, "detail": str}, ...],
+     "measured": {figure: number, ...}, "signal": str, "description": str}
+
+``violations`` holds the first :data:`MAX_REPORTED` violations in time order; ``n_violations``
+counts all of them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+#: How many violations a result lists (``n_violations`` counts all of them).
+MAX_REPORTED = 20
+
+Number = int | float
+
+
+def plain(x: object) -> Any:
+    """A numpy scalar as the Python int/float that JSON understands (other values unchanged)."""
+    if isinstance(x, bool | np.bool_):
+        return bool(x)
+    if isinstance(x, int | np.integer):
+        return int(x)
+    if isinstance(x, float | np.floating):
+        return float(x)
+    return x
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One broken rule at one instant.
+
+    Parameters
+    ----------
+    t_ns : int
+        When it happened [ns].
+    value : int or float
+        What was measured there (the check says in what unit: ns, Hz, counts, signal value).
+    limit : int, float or str
+        What was allowed (a number in the same unit, or a short rule such as ``'never < 1'``).
+    detail : str
+        One line for humans.
+    """
+
+    t_ns: int
+    value: Number
+    limit: Number | str
+    detail: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The violation as a JSON-ready dict."""
+        return {"t_ns": int(self.t_ns), "value": plain(self.value), "limit": plain(self.limit),
+                "detail": self.detail}
+
+
+@dataclass(frozen=True)
+class CheckResult:
+    """The outcome of one check on one trace.
+
+    Parameters
+    ----------
+    name : str
+        Name of the check (given by the user or made from its type and signal).
+    passed : bool
+        True when everything was checked and nothing broke the rule.
+    checked : int
+        How many items were examined (pulses, edges, samples, intervals...).
+    n_violations : int
+        How many violations there were in all.
+    violations : tuple of Violation
+        The first :data:`MAX_REPORTED` of them, in time order.
+    measured : mapping of str to number
+        Key figures (worst spacing, highest rate...); units are in the names (``_ns``, ``_hz``).
+    signal : str
+        The main signal the check reads.
+    description : str
+        The rule in one line.
+    """
+
+    name: str
+    passed: bool
+    checked: int
+    n_violations: int
+    violations: tuple[Violation, ...] = ()
+    measured: Mapping[str, Number] = field(default_factory=dict)
+    signal: str = ""
+    description: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The result as the runner stores it in ``result.json``."""
+        return {
+            "name": self.name,
+            "passed": bool(self.passed),
+            "checked": int(self.checked),
+            "n_violations": int(self.n_violations),
+            "violations": [v.to_dict() for v in self.violations[:MAX_REPORTED]],
+            "measured": {k: plain(v) for k, v in self.measured.items()},
+            "signal": self.signal,
+            "description": self.description,
+        }
+
+    def summary(self) -> str:
+        """One line: verdict, name, counts and the first violation.
+
+        Examples
+        --------
+        >>> CheckResult("spacing", False, 3, 1, (Violation(1200, 200, 500, "too close"),)).summary()
+        'FAIL spacing: 3 checked, 1 violation; first at t=1200 ns: 200 vs limit 500 (too close)'
+        """
+        verdict = "PASS" if self.passed else "FAIL"
+        plural = "" if self.n_violations == 1 else "s"
+        line = f"{verdict} {self.name}: {self.checked} checked, {self.n_violations} violation{plural}"
+        if self.violations:
+            first = self.violations[0]
+            line += f"; first at t={first.t_ns} ns: {plain(first.value)} vs limit {plain(first.limit)}"
+            if first.detail:
+                line += f" ({first.detail})"
+        return line
