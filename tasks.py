@@ -40,7 +40,7 @@ def _run(*cmd: str | Path) -> None:
 
 def ensure_venv() -> None:
     """Create the virtual env and install cosim with its dev extras, once per pyproject change."""
-    if sys.version_info < (3, 11):
+    if sys.version_info < (3, 11):  # noqa: UP036 (this file runs before any venv exists, on any python3)
         sys.exit(f"cosim needs Python >= 3.11; this is {sys.version.split()[0]}")
     wanted = hashlib.sha256((ROOT / "pyproject.toml").read_bytes()).hexdigest()
     if STAMP.exists() and STAMP.read_text().strip() == wanted and PY.exists():
