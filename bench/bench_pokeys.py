@@ -1,0 +1,91 @@
+"""Real-time factor of the PoKeys pulse engine on a 60 s 3-axis job at up to 25 kHz, beside a naive model.
+
+The same job runs twice in one process: through :class:`PulseEngine` (one pulse-train segment per
+slot and axis) and through :class:`NaivePulseEngine` (one SimPy event per pulse). Both are fed by
+the host model over the USB link. Then every pulse of the segment run is checked (at most 25 per
+slot, spacing, direction set-up). Printed: wall time per part and the real-time factors
+(simulated time / wall time). Stepper FMUs are not coupled yet. Run::
+
+    .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from cosim.checks import DirectionSetup, MinPulseSpacing, PulsesPerWindow
+from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
+from cosim.controllers.pokeys.host import HostApp
+from cosim.controllers.pokeys.naive import NaivePulseEngine
+from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.kernel import Simulation
+
+FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
+
+
+def job(seconds: int, config: EngineConfig) -> list[bytes]:
+    """Out-and-back moves until the job lasts at least ``seconds``."""
+    counts: list[tuple[int, ...]] = []
+    k = 0
+    while len(counts) * SLOT_NS < seconds * 1_000_000_000:
+        counts.extend(plan([Move(FAR if k % 2 == 0 else (0, 0, 0))], config.axes,
+                           start=(0, 0, 0) if k % 2 == 0 else FAR))
+        k += 1
+    return to_entries(counts)
+
+
+def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig) -> tuple[Simulation, float, int]:
+    sim = Simulation(seed=1)
+    engine = kind(sim, config)
+    HostApp(sim, engine, entries, link="usb", prefill_slots=100, period_ns=10_000_000)
+    until = (len(entries) + 200) * SLOT_NS
+    started = time.perf_counter()
+    sim.run(until=until)
+    wall = time.perf_counter() - started
+    assert engine.all_underruns == [], engine.all_underruns
+    return sim, wall, until
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=int, default=60, help="job length [s] (default 60)")
+    parser.add_argument("--no-naive", action="store_true", help="skip the naive per-pulse model")
+    args = parser.parse_args()
+
+    config = EngineConfig(axes=uniform_axes(max_speed_hz=25_000, accel=500_000, decel=500_000))
+    started = time.perf_counter()
+    entries = job(args.seconds, config)
+    plan_s = time.perf_counter() - started
+    sim, engine_s, until = simulate(PulseEngine, entries, config)
+    simulated_s = until / 1e9
+    pulses = sum(int(sim.trace.segments(f"pokeys.{a}.step")["count"].sum()) for a in AXES)
+
+    started = time.perf_counter()
+    results = []
+    for a in AXES:
+        step = f"pokeys.{a}.step"
+        results += [PulsesPerWindow(step, 25, SLOT_NS).evaluate(sim.trace),
+                    MinPulseSpacing(step, SLOT_NS // 25).evaluate(sim.trace),
+                    DirectionSetup(step, f"pokeys.{a}.dir", config.dir_setup_ns, positive_level=0).evaluate(sim.trace)]
+    checks_s = time.perf_counter() - started
+    assert all(r.passed for r in results), [r.summary() for r in results if not r.passed]
+
+    print(f"job: {simulated_s:.1f} s simulated, {len(entries)} slots, {pulses} pulses on 3 axes (max 25 kHz)")
+    print(f"  planning (host planner, before the run)  {plan_s:8.3f} s")
+    print(f"  engine + host simulation                 {engine_s:8.3f} s   RTF {simulated_s / engine_s:7.1f}x")
+    print(f"  checks over every pulse ({len(results)} checks)      {checks_s:8.3f} s")
+    print("  stepper FMUs                             (not coupled yet)")
+    total = engine_s + checks_s
+    print(f"  engine + checks                          {total:8.3f} s   RTF {simulated_s / total:7.1f}x")
+    if not args.no_naive:
+        naive_sim, naive_s, _ = simulate(NaivePulseEngine, entries, config)
+        naive_pulses = sum(naive_sim.trace.pulses(f"pokeys.{a}.step")[0].size for a in AXES)
+        assert naive_pulses == pulses
+        print(f"  naive model, one event per pulse         {naive_s:8.3f} s   RTF {simulated_s / naive_s:7.1f}x")
+        print(f"segment engine / naive model: {naive_s / engine_s:.1f}x faster "
+              f"({(naive_s + checks_s) / total:.1f}x with the same checks added to both)")
+
+
+if __name__ == "__main__":
+    main()

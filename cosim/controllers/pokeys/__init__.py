@@ -1,0 +1,63 @@
+"""PoKeys pulse engine model (PoKeys56U/56E, pulse engine v1): 1 ms slots, 128-slot buffer, switches, homing.
+
+Public API::
+
+    from cosim.controllers.pokeys import PulseEngine, EngineConfig, AxisConfig, EngineState
+    engine = PulseEngine(sim, EngineConfig())
+    engine.fill_buffer([encode_entry((10, -5, 25))]); engine.set_state(EngineState.BUFFER)
+
+See ``docs/pokeys.md`` for the rules and the choices where the vendor document is silent.
+"""
+
+from cosim.controllers.pokeys.buffer import (
+    SlotBuffer,
+    decode_axis,
+    decode_entry,
+    encode_axis,
+    encode_entry,
+    signed_count,
+)
+from cosim.controllers.pokeys.config import AxisConfig, EngineConfig, uniform_axes
+from cosim.controllers.pokeys.engine import PulseEngine
+from cosim.controllers.pokeys.limits import (
+    AXES,
+    BUFFER_SLOTS,
+    MAX_PULSES_PER_SLOT,
+    MAX_RATE_HZ,
+    PINS,
+    SLOT_NS,
+)
+from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
+from cosim.controllers.pokeys.records import FillReply, Register, Status, Underrun
+from cosim.controllers.pokeys.states import AxisState, EngineState
+from cosim.controllers.pokeys.switches import TRIPPED, SwitchInputs, SwitchSample
+
+__all__ = [
+    "AXES",
+    "BUFFER_SLOTS",
+    "MAX_PULSES_PER_SLOT",
+    "MAX_RATE_HZ",
+    "PINS",
+    "SLOT_NS",
+    "TRIPPED",
+    "AxisConfig",
+    "AxisMotion",
+    "AxisState",
+    "EngineConfig",
+    "EngineState",
+    "FillReply",
+    "PulseEngine",
+    "Register",
+    "SlotBuffer",
+    "SlotLimits",
+    "Status",
+    "SwitchInputs",
+    "SwitchSample",
+    "Underrun",
+    "decode_axis",
+    "decode_entry",
+    "encode_axis",
+    "encode_entry",
+    "signed_count",
+    "uniform_axes",
+]

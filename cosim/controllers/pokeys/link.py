@@ -1,0 +1,76 @@
+"""The host-device link: one-way delays with seeded jitter, per profile.
+
+A delay is ``latency_ns + jitter`` with the jitter drawn uniformly from ``0..jitter_ns`` by the
+simulation's random generator (``sim.rng``), so a run is reproducible from its seed.
+
+Profiles (assumptions, not from the vendor document; make your own with :class:`LinkProfile`):
+
+``usb``       USB HID, 1 ms interrupt frames: 0.5 ms + 0..1 ms each way
+``ethernet``  UDP on a quiet LAN: 0.1 ms + 0..0.2 ms each way
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from cosim.controllers.pokeys.limits import check_int_range
+from cosim.errors import ConfigurationError
+from cosim.kernel import Simulation
+
+
+@dataclass(frozen=True)
+class LinkProfile:
+    """Delay model of a link.
+
+    Parameters
+    ----------
+    name : str
+    latency_ns : int
+        Fixed part of a one-way delay [ns].
+    jitter_ns : int
+        Random part, uniform in ``0..jitter_ns`` [ns].
+    """
+
+    name: str
+    latency_ns: int
+    jitter_ns: int
+
+    def __post_init__(self) -> None:
+        check_int_range(self.latency_ns, "latency_ns", 0, 10**10, "ns", where=f"link {self.name}")
+        check_int_range(self.jitter_ns, "jitter_ns", 0, 10**10, "ns", where=f"link {self.name}")
+
+
+PROFILES: dict[str, LinkProfile] = {
+    "usb": LinkProfile("usb", latency_ns=500_000, jitter_ns=1_000_000),
+    "ethernet": LinkProfile("ethernet", latency_ns=100_000, jitter_ns=200_000),
+}
+
+
+def profile(link: str | LinkProfile) -> LinkProfile:
+    """A profile by name (``usb``, ``ethernet``) or as given."""
+    if isinstance(link, LinkProfile):
+        return link
+    if link not in PROFILES:
+        raise ConfigurationError.out_of_range("link", link, ", ".join(PROFILES))
+    return PROFILES[link]
+
+
+class Link:
+    """One link between a host and the device, drawing its delays from ``sim.rng``."""
+
+    BATCH = 1024
+    """Delays drawn from ``sim.rng`` at a time (the sequence depends only on the seed)."""
+
+    def __init__(self, sim: Simulation, link: str | LinkProfile) -> None:
+        self.sim = sim
+        self.profile = profile(link)
+        self._drawn: list[int] = []
+
+    def delay(self) -> int:
+        """One one-way delay [ns]."""
+        p = self.profile
+        if not p.jitter_ns:
+            return p.latency_ns
+        if not self._drawn:
+            self._drawn = (p.latency_ns + self.sim.rng.integers(0, p.jitter_ns + 1, size=self.BATCH)).tolist()[::-1]
+        return self._drawn.pop()
