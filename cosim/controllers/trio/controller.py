@@ -1,0 +1,418 @@
+"""The Trio EURO205X Motion Coordinator: servo cycle, parameters, TABLE and commands.
+
+:class:`TrioController` owns the axes, TABLE memory and WDOG, and runs the servo cycle as a SimPy
+process at ``k * SERVO_PERIOD`` (priority SERVO). Each servo tick, in this order:
+
+1. latch MPOS of every axis (the pulses counted so far);
+2. move waiting ``PWM_CONTROL(3)`` loads into FIFOs that now have room;
+3. end moves whose last cycle was output; load buffered moves whose axes are free;
+4. run one cycle of every move: demand positions, VP_SPEED, step pulses (:mod:`.motion`);
+5. apply pending DEFPOS offsets (after loading moves: a move issued right after DEFPOS is
+   loaded before the new position applies, as the Trio manual warns; ``WAIT UNTIL OFFPOS=0``);
+6. update speed-linked PWM marks from VP_SPEED of their link axis;
+7. check FE_LIMIT, record DPOS, MPOS, VP_SPEED, then release programs waiting for move-buffer
+   space or for idle axes.
+
+Commands come from programs (:class:`TrioProcess`, the BASIC interpreter); they take effect at
+the instant they are given, in zero simulated time. Moves are buffered one deep per axis (the
+running move and one more); a further move makes its program wait.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Generator, Sequence
+from fractions import Fraction
+from typing import Any
+
+from simpy.events import Event
+
+from cosim.controllers.trio.gate import GateFifo, toggled_entries
+from cosim.controllers.trio.motion import Axis, Move
+from cosim.controllers.trio.outputs import SettledSignal
+from cosim.controllers.trio.params import (
+    ATYPE_STEPPER_PWM,
+    AXIS_PARAMS,
+    DEFAULT_SERVO_PERIOD_US,
+    DEFAULT_TABLE_SIZE,
+    FIFO_DEPTH,
+    PWM_AXES,
+    PWM_ENCODER_MODULUS,
+    PWM_REGISTER_MAX,
+    READ_ONLY_AXIS_PARAMS,
+    SYSTEM_PARAMS,
+    as_flag,
+    as_int,
+    check_servo_period_us,
+    exact,
+    unknown_name,
+)
+from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
+from cosim.errors import ConfigurationError, TimingViolation
+from cosim.kernel import Simulation
+from cosim.signals import Signal
+from cosim.timebase import Priority
+
+#: Arguments each PWM_CONTROL mode takes after the mode.
+PWM_CONTROL_ARGS = {0: (), 1: (), 2: ("multiplier", "offset", "limit value", "link axis"),
+                    3: ("GT/LT", "ON/OFF", "table start", "table end"), 4: (), 5: (), 6: ()}
+
+
+class TrioController:
+    """A EURO205X with the PWM FPGA: axes 0..n-1, PWM and gating on axes 2 and 3.
+
+    Parameters
+    ----------
+    sim : Simulation
+    servo_period_us : int
+        SERVO_PERIOD [us]: 250, 500, 1000 (default) or 2000.
+    n_axes : int
+        Number of axes (4 by default; must include axes 2 and 3).
+    table_size : int
+        TABLE entries (16000 by default).
+    encoder_at_atype : int, optional
+        Raw PWM_ENCODER value an axis shows after ATYPE=35 (the note: "will often have a value");
+        default: drawn from ``sim.rng``, so programs must clear it with PWM_CONTROL(6).
+    device : str
+        Trace device name (``trio``).
+    """
+
+    def __init__(self, sim: Simulation, *, servo_period_us: int = DEFAULT_SERVO_PERIOD_US, n_axes: int = 4,
+                 table_size: int = DEFAULT_TABLE_SIZE, encoder_at_atype: int | None = None,
+                 device: str = "trio") -> None:
+        self.sim = sim
+        self.servo_period_us = check_servo_period_us(servo_period_us)
+        self.period_ns = sim.ticks(self.servo_period_us, "us", name="SERVO_PERIOD")
+        self.period_s = Fraction(self.servo_period_us, 10**6)
+        if isinstance(n_axes, bool) or not isinstance(n_axes, int) or not max(PWM_AXES) < n_axes <= 64:
+            raise ConfigurationError.out_of_range("n_axes", n_axes, f"{max(PWM_AXES) + 1}..64")
+        if isinstance(table_size, bool) or not isinstance(table_size, int) or table_size < 1:
+            raise ConfigurationError.out_of_range("table_size", table_size, ">= 1 entries")
+        self.device = device
+        self.encoder_at_atype = encoder_at_atype
+        self.axes = {n: Axis(sim, n, pwm=n in PWM_AXES, device=device) for n in range(n_axes)}
+        self.table_memory = [Fraction(0)] * table_size
+        self.vr_memory: dict[int, Fraction] = {}
+        self.wdog = SettledSignal(sim, f"{device}.wdog", kind="bit",
+                                  description="WDOG: drive enable; OFF switches the PWM outputs off")
+        self._queued: list[Move] = []
+        self._move_waiters: deque[tuple[Move, Event]] = deque()
+        self._idle_waiters: list[tuple[tuple[int, ...], Event]] = []
+        self.ticks = 0
+        sim.process(self.servo_cycle())
+
+    # -- the servo cycle ----------------------------------------------------------------------
+    def servo_cycle(self) -> Generator[Event, Any, None]:
+        """SimPy process: the servo interrupt at ``k * SERVO_PERIOD``."""
+        k = -(-self.sim.now // self.period_ns)
+        while True:
+            yield self.sim.at(k * self.period_ns, Priority.SERVO)
+            self._tick()
+            k += 1
+
+    def _tick(self) -> None:
+        now = self.sim.now
+        self.ticks += 1
+        axes = self.axes.values()
+        for axis in axes:
+            axis.sample_mpos()
+        for axis in axes:
+            if axis.gate is not None:
+                axis.gate.retry_waiting()
+        for axis in axes:
+            if axis.current is not None and axis.current.done:
+                axis.current = None
+        for move in list(self._queued):
+            if all(self.axes[a].current is None for a in move.axes):
+                move.load(self.axes, now)
+                for a in move.axes:
+                    self.axes[a].current, self.axes[a].queued = move, None
+                self._queued.remove(move)
+        running: dict[int, Move] = {}
+        for axis in axes:
+            axis.vp_speed = Fraction(0)
+            if axis.current is not None:
+                running[id(axis.current)] = axis.current
+        for move in running.values():
+            demands, speed = move.advance(self.period_s)
+            for a, demand in zip(move.axes, demands, strict=True):
+                self.axes[a].vp_speed = speed
+                self.axes[a].output_cycle(now, self.period_ns, demand)
+        for axis in axes:
+            axis.apply_offset()
+        for axis in axes:
+            if axis.pwm is not None and axis.pwm.link is not None:
+                axis.pwm.servo_update(self.axes[axis.pwm.link.link_axis].vp_speed)
+        for axis in axes:
+            self._check_following_error(axis)
+            axis.record()
+        self._release_waiters()
+
+    def _check_following_error(self, axis: Axis) -> None:
+        if not (axis.stepper and axis.params["SERVO"]):
+            return
+        error = axis.dpos - axis.mpos_sampled
+        if abs(error) > axis.params["FE_LIMIT"]:
+            raise TimingViolation(
+                f"{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
+                f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
+                "motion error)")
+
+    def _release_waiters(self) -> None:
+        while self._move_waiters and self._can_queue(self._move_waiters[0][0]):
+            move, done = self._move_waiters.popleft()
+            self._queue(move)
+            done.succeed()
+        still = []
+        for axes, done in self._idle_waiters:
+            if all(self.axes[a].idle for a in axes):
+                done.succeed()
+            else:
+                still.append((axes, done))
+        self._idle_waiters = still
+
+    # -- axes and parameters ------------------------------------------------------------------
+    def axis(self, number: object, *, where: str = "") -> Axis:
+        """Axis ``number`` (ConfigurationError naming the allowed axes if there is none)."""
+        n = as_int(number, "axis", f"0..{len(self.axes) - 1}", where=where)
+        if n not in self.axes:
+            raise ConfigurationError.out_of_range("axis", n, f"0..{len(self.axes) - 1}", where=where)
+        return self.axes[n]
+
+    def set_param(self, name: str, value: object, *, axis: int | None = None) -> None:
+        """Write parameter ``name`` (vendor name) of ``axis`` (or a controller parameter)."""
+        key = name.upper()
+        if key == "WDOG":
+            self.wdog.request(as_flag(value, "WDOG"))
+            return
+        if key in SYSTEM_PARAMS or key in READ_ONLY_AXIS_PARAMS:
+            hint = " (use DEFPOS)" if key in ("DPOS", "MPOS") else ""
+            raise ConfigurationError(f"{key} is read-only{hint}")
+        if key not in AXIS_PARAMS:
+            raise ConfigurationError(unknown_name(key))
+        spec = AXIS_PARAMS[key]
+        ax = self.axis(0 if axis is None else axis)
+        if spec.pwm_only and not ax.has_pwm:
+            raise ConfigurationError.out_of_range(f"axis of {key}", ax.number, _pwm_axes())
+        converted = spec.convert(value, key, "")
+        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and not ax.has_pwm:
+            raise ConfigurationError.out_of_range(f"axis of ATYPE={ATYPE_STEPPER_PWM}", ax.number, _pwm_axes())
+        old = ax.params[key]
+        ax.params[key] = converted
+        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and old != ATYPE_STEPPER_PWM:
+            ax.became_stepper()
+            assert ax.gate is not None
+            raw = (int(self.sim.rng.integers(0, PWM_ENCODER_MODULUS)) if self.encoder_at_atype is None
+                   else self.encoder_at_atype)
+            ax.gate.preset_encoder(raw)
+        elif key == "PWM_CYCLE":
+            assert ax.pwm is not None
+            ax.pwm.set_cycle(int(converted))
+        elif key == "PWM_MARK":
+            assert ax.pwm is not None
+            ax.pwm.set_mark(int(converted))
+
+    def get_param(self, name: str, *, axis: int | None = None) -> Fraction:
+        """Read parameter ``name`` of ``axis`` (or a controller parameter) now, exactly."""
+        key = name.upper()
+        if key == "WDOG":
+            return Fraction(int(self.wdog.value))
+        if key == "SERVO_PERIOD":
+            return Fraction(self.servo_period_us)
+        ax = self.axis(0 if axis is None else axis)
+        if key in AXIS_PARAMS:
+            if AXIS_PARAMS[key].pwm_only and not ax.has_pwm:
+                raise ConfigurationError.out_of_range(f"axis of {key}", ax.number, _pwm_axes())
+            return Fraction(ax.params[key])
+        now = self.sim.now
+        values: dict[str, Any] = {
+            "DPOS": lambda: ax.dpos, "MPOS": lambda: ax.mpos_at(now), "VP_SPEED": lambda: ax.vp_speed,
+            "OFFPOS": lambda: ax.offpos, "IDLE": lambda: -1 if ax.idle else 0,
+            "FE": lambda: ax.dpos - ax.mpos_at(now),
+            "PWM_ENCODER": lambda: self._gate(ax.number, "PWM_ENCODER").encoder_value(),
+        }
+        if key not in values:
+            raise ConfigurationError(unknown_name(key))
+        return Fraction(values[key]())
+
+    # -- TABLE ----------------------------------------------------------------------------------
+    def table(self, start: object, *values: object) -> None:
+        """``TABLE(start, v1, v2, ...)``: write consecutive TABLE locations from ``start``."""
+        size = len(self.table_memory)
+        first = as_int(start, "TABLE index", f"0..{size - 1}")
+        last = first + len(values) - 1
+        if not 0 <= first < size or last >= size:
+            bad = first if not 0 <= first < size else last
+            raise ConfigurationError.out_of_range("TABLE index", bad, f"0..{size - 1}")
+        for k, value in enumerate(values):
+            self.table_memory[first + k] = exact(value, f"TABLE({first + k})")
+
+    def table_value(self, index: object) -> Fraction:
+        """``TABLE(n)``: read one TABLE location."""
+        size = len(self.table_memory)
+        n = as_int(index, "TABLE index", f"0..{size - 1}")
+        if not 0 <= n < size:
+            raise ConfigurationError.out_of_range("TABLE index", n, f"0..{size - 1}")
+        return self.table_memory[n]
+
+    # -- motion commands ----------------------------------------------------------------------
+    def defpos(self, axes: Sequence[int], positions: Sequence[object]) -> None:
+        """``DEFPOS(p1, ...)`` for ``axes``: applied by the next servo cycle (see OFFPOS)."""
+        _check_count("DEFPOS", positions, axes)
+        for a, p in zip(axes, positions, strict=False):
+            self.axis(a).defpos(exact(p, "DEFPOS position"))
+
+    def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool) -> Event:
+        """``MOVE`` / ``MOVEABS`` on ``axes`` (the first is the base axis): an event once it is buffered."""
+        command = "MOVEABS" if absolute else "MOVE"
+        _check_count(command, values, axes)
+        group = tuple(int(a) for a in axes[:len(values)])
+        base = self.axis(group[0])
+        for a in group:
+            self.axis(a)
+        if base.params["SPEED"] <= 0:
+            raise ConfigurationError.out_of_range(f"SPEED of axis {base.number} for {command}",
+                                                  _plain(Fraction(base.params["SPEED"])), "> 0")
+        move = Move(group, tuple(exact(v, f"{command} value") for v in values), absolute)
+        done = self.sim.env.event()
+        if not self._move_waiters and self._can_queue(move):
+            self._queue(move)
+            done.succeed()
+        else:
+            self._move_waiters.append((move, done))
+        return done
+
+    def _can_queue(self, move: Move) -> bool:
+        return all(self.axes[a].queued is None for a in move.axes)
+
+    def _queue(self, move: Move) -> None:
+        for a in move.axes:
+            self.axes[a].queued = move
+        self._queued.append(move)
+
+    def wait_idle(self, axes: Sequence[int]) -> Event:
+        """An event that succeeds at the servo tick where every axis in ``axes`` is idle."""
+        group = tuple(self.axis(a).number for a in axes)
+        done = self.sim.env.event()
+        if all(self.axes[a].idle for a in group):
+            done.succeed()
+        else:
+            self._idle_waiters.append((group, done))
+        return done
+
+    # -- PWM_CONTROL --------------------------------------------------------------------------
+    def pwm_control(self, axis: int, mode: object, *args: object) -> Event | None:
+        """``PWM_CONTROL(mode, ...)`` on ``axis``; mode 3 returns an event that succeeds once loaded.
+
+        Raises
+        ------
+        ConfigurationError
+            An axis without the feature, an unknown mode, a wrong number of arguments, a comparison
+            flag other than 0/1, TABLE bounds, end before start, a limit outside 0..65535.
+        """
+        ax = self.axis(axis)
+        if not ax.has_pwm:
+            raise ConfigurationError.out_of_range("PWM_CONTROL axis", ax.number, _pwm_axes())
+        number = as_int(mode, "PWM_CONTROL mode", "0..6")
+        if number not in PWM_CONTROL_ARGS:
+            raise ConfigurationError.out_of_range("PWM_CONTROL mode", number, "0..6")
+        wanted = PWM_CONTROL_ARGS[number]
+        if len(args) != len(wanted):
+            names = ", ".join(wanted) if wanted else "nothing"
+            raise ConfigurationError(f"PWM_CONTROL({number}) takes {len(wanted)} arguments after the mode "
+                                     f"({names}); got {len(args)}")
+        pwm, gate = ax.pwm, self._gate(ax.number, "PWM_CONTROL")
+        assert pwm is not None
+        if number == 0:
+            pwm.switch(PwmMode.OFF)
+            gate.gating_off()
+            gate.set_pwm_on(False)
+        elif number == 1:
+            pwm.switch(PwmMode.FIXED)
+            gate.set_pwm_on(True)
+        elif number == 2:
+            pwm.switch(PwmMode.LINKED, self._speed_link(*args))
+            gate.set_pwm_on(True)
+        elif number == 3:
+            return gate.load(self._fifo_entries(ax, *args))
+        elif number == 4:
+            gate.empty()
+        elif number == 5:
+            gate.gating_on()
+        else:
+            gate.preset_encoder(0)
+        return None
+
+    def _speed_link(self, multiplier: object, offset: object, limit: object, link_axis: object) -> SpeedLink:
+        allowed = f"0..{PWM_REGISTER_MAX}"
+        lim = as_int(limit, "PWM_CONTROL(2) limit value", allowed)
+        if not 0 <= lim <= PWM_REGISTER_MAX:
+            raise ConfigurationError.out_of_range("PWM_CONTROL(2) limit value", lim, allowed)
+        link = self.axis(as_int(link_axis, "PWM_CONTROL(2) link axis", f"0..{len(self.axes) - 1}"))
+        return SpeedLink(exact(multiplier, "PWM_CONTROL(2) multiplier"), exact(offset, "PWM_CONTROL(2) offset"),
+                         lim, link.number)
+
+    def _fifo_entries(self, ax: Axis, compare: object, state: object, start: object, end: object) -> list[Any]:
+        flag = exact(compare, "PWM_CONTROL(3) GT/LT flag")
+        if flag not in (0, 1):
+            raise ConfigurationError.out_of_range("PWM_CONTROL(3) GT/LT flag", _plain(flag), "1 (GT) or 0 (LT)")
+        first_state = as_flag(state, "PWM_CONTROL(3) ON/OFF")
+        size = len(self.table_memory)
+        bounds = f"0..{size - 1} (TABLE size {size})"
+        first = as_int(start, "PWM_CONTROL(3) table start", bounds)
+        last = as_int(end, "PWM_CONTROL(3) table end", bounds)
+        if not 0 <= first < size:
+            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table start", first, bounds)
+        if not 0 <= last < size:
+            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table end", last, bounds)
+        if last < first:
+            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table end", last, f">= table start {first}")
+        if last - first + 1 > FIFO_DEPTH:
+            raise ConfigurationError.out_of_range("PWM_CONTROL(3) positions in one load", last - first + 1,
+                                                  f"1..{FIFO_DEPTH} (the FIFO depth)")
+        return toggled_entries(self.table_memory[first:last + 1], ax.units, greater=flag == 1,
+                               first_state=first_state)
+
+    def _gate(self, axis: int, what: str) -> GateFifo:
+        gate = self.axes[axis].gate
+        if gate is None:
+            raise ConfigurationError.out_of_range(f"{what} axis", axis, _pwm_axes())
+        return gate
+
+    def pwm(self, axis: int) -> PwmGenerator:
+        """The PWM generator of a PWM axis."""
+        pwm = self.axis(axis).pwm
+        if pwm is None:
+            raise ConfigurationError.out_of_range("PWM axis", axis, _pwm_axes())
+        return pwm
+
+    def gate(self, axis: int) -> GateFifo:
+        """The gating FIFO of a PWM axis."""
+        return self._gate(self.axis(axis).number, "gate")
+
+    def laser_inputs(self, axis: int = 3) -> dict[str, tuple[Signal, Callable[[float], bool | int]]]:
+        """The signals that drive a laser from PWM axis ``axis``: ``{input: (signal, convert)}``.
+
+        Input names are those of the Laser FMU (``enable`` = WDOG, ``gate``, ``pwm_period`` =
+        PWM_CYCLE, ``pwm_on`` = the mark, ``pwm_phase``); a scenario wires them with
+        ``for name, (signal, convert) in trio.laser_inputs(3).items(): plant.drive(name, signal, convert=convert)``.
+        """
+        pwm, gate = self.pwm(axis), self.gate(axis)
+        return {"enable": (self.wdog.signal, bool), "gate": (gate.output.signal, bool),
+                "pwm_period": (pwm.cycle_out.signal, int), "pwm_on": (pwm.mark_out.signal, int),
+                "pwm_phase": (pwm.phase_out, int)}
+
+
+def _pwm_axes() -> str:
+    return ", ".join(map(str, PWM_AXES)) + " (the axes with the PWM feature)"
+
+
+def _plain(value: Fraction) -> int | float:
+    return value.numerator if value.denominator == 1 else float(value)
+
+
+def _check_count(command: str, values: Sequence[object], axes: Sequence[int]) -> None:
+    if not values or len(values) > len(axes):
+        raise ConfigurationError.out_of_range(f"number of {command} values", len(values),
+                                              f"1..{len(axes)} (one per BASE axis)")
+

@@ -1,0 +1,235 @@
+"""Trio EURO205X parameters: names, defaults, allowed ranges and the hardware constants of TN20-81.
+
+Parameters keep their vendor names (``UNITS``, ``PWM_MARK``...) because that is what users write in
+their programs; values are exact (``int`` or :class:`~fractions.Fraction`), never floats. Every
+write goes through :func:`check_value`, which raises
+:class:`~cosim.errors.ConfigurationError` naming the parameter, the value and the allowed range.
+
+Constants from the note (TN20-81) and the controller facts:
+
+==========================  ==========  =============================================
+``PWM_CLOCK_HZ``            20 MHz      base clock of the PWM generator
+``PWM_REGISTER_MAX``        65535       largest ``PWM_CYCLE`` / ``PWM_MARK`` [clocks]
+``PWM_ENCODER_BITS``        29          width of the ``PWM_ENCODER`` step counter
+``FIFO_DEPTH``              256         gate positions the FIFO holds
+``PWM_AXES``                (2, 3)      the only axes with the PWM / gating feature
+``SERVO_PERIODS_US``        250..2000   servo periods modelled (1 ms default)
+==========================  ==========  =============================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
+from fractions import Fraction
+
+from cosim.errors import ConfigurationError
+
+PWM_CLOCK_HZ = 20_000_000
+#: One PWM clock [ns] (exact: 10**9 / 20 MHz).
+PWM_CLOCK_NS = 50
+PWM_REGISTER_MAX = 65535
+PWM_ENCODER_BITS = 29
+PWM_ENCODER_MODULUS = 1 << PWM_ENCODER_BITS
+FIFO_DEPTH = 256
+PWM_AXES = (2, 3)
+SERVO_PERIODS_US = (250, 500, 1000, 2000)
+DEFAULT_SERVO_PERIOD_US = 1000
+#: ATYPE values modelled: 0 virtual axis (no output), 35 stepper output with PWM (axes 2 and 3).
+ATYPE_VIRTUAL = 0
+ATYPE_STEPPER_PWM = 35
+#: Divisor of the speed-link formula of PWM_CONTROL(2) (``VP_SPEED * multiplier / 100000 + offset``).
+SPEED_LINK_DIVISOR = 100_000
+#: Default size of TABLE memory [entries] (not stated in the note: a model parameter).
+DEFAULT_TABLE_SIZE = 16_000
+
+#: BASIC constants.
+ON, OFF, TRUE, FALSE = 1, 0, -1, 0
+
+Number = int | Fraction
+
+
+def exact(value: object, name: str, *, where: str = "") -> Fraction:
+    """A number as an exact Fraction (a float is taken as the decimal it prints as).
+
+    Raises
+    ------
+    ConfigurationError
+        If ``value`` is not a finite number.
+    """
+    if isinstance(value, bool):
+        return Fraction(int(value))
+    if isinstance(value, int | Fraction):
+        return Fraction(value)
+    try:
+        result = Fraction(Decimal(str(value)))
+    except (InvalidOperation, ValueError, TypeError):
+        raise ConfigurationError.out_of_range(name, value, "a finite number", where=where) from None
+    return result
+
+
+def as_int(value: object, name: str, allowed: str, *, where: str = "") -> int:
+    """A whole number as ``int`` (``400.0`` is fine, ``400.5`` is not)."""
+    number = exact(value, name, where=where)
+    if number.denominator != 1:
+        raise ConfigurationError.out_of_range(name, _show(number), allowed, where=where)
+    return number.numerator
+
+
+def as_flag(value: object, name: str, *, where: str = "") -> int:
+    """An ON/OFF value: 1 (ON), 0 (OFF) or -1 (TRUE) -> 1 or 0."""
+    number = exact(value, name, where=where)
+    if number not in (0, 1, -1):
+        raise ConfigurationError.out_of_range(name, _show(number), "ON/OFF (1, 0 or TRUE = -1)", where=where)
+    return 1 if number else 0
+
+
+def _show(value: Fraction) -> int | float | Fraction:
+    """A value as the user most likely wrote it, for messages."""
+    if value.denominator == 1:
+        return value.numerator
+    as_float = float(value)
+    return as_float if Fraction(Decimal(str(as_float))) == value else value
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter: its vendor name, default, allowed range and meaning.
+
+    Parameters
+    ----------
+    name : str
+        Vendor name, upper case (``PWM_MARK``).
+    default : int or Fraction
+        Power-up value.
+    allowed : str
+        The allowed range as text for error messages (``"0..65535"``).
+    convert : callable
+        ``convert(value, name, where) -> int | Fraction``: checks and converts a written value.
+    unit : str
+        Unit of the value.
+    doc : str
+        One line for humans.
+    pwm_only : bool
+        Only on axes with the PWM feature (:data:`PWM_AXES`).
+    """
+
+    name: str
+    default: Number
+    allowed: str
+    convert: Callable[[object, str, str], Number]
+    unit: str = ""
+    doc: str = ""
+    pwm_only: bool = False
+
+
+def _range(low: Fraction | None, high: Fraction | None, *, integer: bool, low_open: bool = False,
+           allowed: str) -> Callable[[object, str, str], Number]:
+    def convert(value: object, name: str, where: str) -> Number:
+        number = exact(value, name, where=where)
+        bad = (integer and number.denominator != 1) or (
+            low is not None and (number <= low if low_open else number < low)) or (
+            high is not None and number > high)
+        if bad:
+            raise ConfigurationError.out_of_range(name, _show(number), allowed, where=where)
+        return number.numerator if integer else number
+
+    return convert
+
+
+def _flag(value: object, name: str, where: str) -> Number:
+    return as_flag(value, name, where=where)
+
+
+def _atype(value: object, name: str, where: str) -> Number:
+    allowed = f"{ATYPE_VIRTUAL} (virtual), {ATYPE_STEPPER_PWM} (stepper output with PWM)"
+    number = as_int(value, name, allowed, where=where)
+    if number not in (ATYPE_VIRTUAL, ATYPE_STEPPER_PWM):
+        raise ConfigurationError.out_of_range(name, number, allowed, where=where)
+    return number
+
+
+_REGISTER = "integer 0..65535"
+
+#: Writable axis parameters.
+AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
+    ParamSpec("UNITS", 1, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
+              "counts/unit", "step pulses per user unit"),
+    ParamSpec("SPEED", 1000, ">= 0", _range(Fraction(0), None, integer=False, allowed=">= 0"),
+              "units/s", "programmed path speed"),
+    ParamSpec("ACCEL", 1000, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
+              "units/s^2", "acceleration"),
+    ParamSpec("DECEL", 1000, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
+              "units/s^2", "deceleration"),
+    ParamSpec("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER_PWM}", _atype, "",
+              "axis type: 0 virtual, 35 stepper output with PWM"),
+    ParamSpec("SERVO", 0, "ON/OFF", _flag, "", "servo on: step pulses feed MPOS and PWM_ENCODER"),
+    ParamSpec("FE_LIMIT", 2000, ">= 0", _range(Fraction(0), None, integer=False, allowed=">= 0"),
+              "units", "largest |DPOS - MPOS| before a motion error"),
+    ParamSpec("PWM_CYCLE", 0, _REGISTER, _range(Fraction(0), Fraction(PWM_REGISTER_MAX), integer=True,
+                                                 allowed=_REGISTER),
+              "clocks", "PWM mark+space period [20 MHz clocks]", pwm_only=True),
+    ParamSpec("PWM_MARK", 0, _REGISTER, _range(Fraction(0), Fraction(PWM_REGISTER_MAX), integer=True,
+                                                allowed=_REGISTER),
+              "clocks", "PWM on-time [20 MHz clocks]", pwm_only=True),
+)}
+
+#: Axis parameters that can only be read (computed by the model).
+READ_ONLY_AXIS_PARAMS: dict[str, str] = {
+    "DPOS": "demand position [units]",
+    "MPOS": "measured position [units] (counted step pulses while SERVO=ON)",
+    "VP_SPEED": "velocity-profile speed [units/s]; the path speed of an interpolated move",
+    "OFFPOS": "position offset of a DEFPOS not yet applied by the servo cycle [units]",
+    "PWM_ENCODER": "29-bit count of the step pulses (PWM axes)",
+    "IDLE": "TRUE (-1) when the axis has no move running or buffered",
+    "FE": "following error DPOS - MPOS [units]",
+}
+
+#: Controller-wide parameters.
+SYSTEM_PARAMS: dict[str, str] = {
+    "WDOG": "drive enable relay; OFF switches every PWM output off at once",
+    "SERVO_PERIOD": "servo period [us] (read-only: set when the controller is created)",
+}
+
+
+def axis_spec(name: str) -> ParamSpec:
+    """The spec of writable axis parameter ``name`` (KeyError if there is none)."""
+    return AXIS_PARAMS[name.upper()]
+
+
+def check_servo_period_us(value: object) -> int:
+    """A servo period [us] the EURO205X model supports."""
+    allowed = ", ".join(map(str, SERVO_PERIODS_US)) + " us"
+    number = as_int(value, "SERVO_PERIOD", allowed)
+    if number not in SERVO_PERIODS_US:
+        raise ConfigurationError.out_of_range("SERVO_PERIOD", number, allowed)
+    return number
+
+#: Commands and functions of the modelled BASIC subset (see :mod:`cosim.controllers.trio.basic`).
+COMMANDS: dict[str, str] = {
+    "BASE": "BASE(a, b, ...): the axes later commands of this program act on",
+    "TABLE": "TABLE(start, v1, ...) writes TABLE memory; TABLE(n) reads one location",
+    "PWM_CONTROL": "PWM_CONTROL(mode, ...): PWM output, speed link and gating (TN20-81)",
+    "DEFPOS": "DEFPOS(p1, ...): define the position of the BASE axes",
+    "MOVE": "MOVE(d1, ...): relative move, interpolated over the BASE axes",
+    "MOVEABS": "MOVEABS(p1, ...): absolute move, interpolated over the BASE axes",
+    "WA": "WA(ms): wait",
+    "VR": "VR(n): global variable",
+    "ABS": "ABS(x)",
+    "INT": "INT(x): integer part",
+}
+CONSTANTS: dict[str, int] = {"ON": ON, "OFF": OFF, "TRUE": TRUE, "FALSE": FALSE}
+KEYWORDS = frozenset(AXIS_PARAMS) | frozenset(READ_ONLY_AXIS_PARAMS) | frozenset(SYSTEM_PARAMS) | frozenset(
+    COMMANDS) | frozenset(CONSTANTS) | frozenset({"AXIS", "WAIT", "IDLE", "UNTIL", "REPEAT", "WHILE", "WEND",
+                                                  "FOR", "TO", "STEP", "NEXT", "IF", "THEN", "ELSE", "ENDIF",
+                                                  "AND", "OR", "NOT"})
+
+
+def unknown_name(name: str) -> str:
+    """The message for a name that is no keyword of the modelled subset, with close matches."""
+    import difflib
+
+    close = difflib.get_close_matches(name.upper(), sorted(KEYWORDS), n=3)
+    hint = f"; did you mean {', '.join(close)}?" if close else ""
+    return f"unknown keyword {name}{hint}"

@@ -1,0 +1,118 @@
+"""A Trio program's view of the controller: the BASIC vocabulary for Python scenario scripts.
+
+Each Trio program (process) has its own BASE group; parameters and commands act on the BASE axis
+(or the whole BASE group for moves), or on the axis given by an ``AXIS(n)`` modifier (``axis=n``
+here). Commands that can make a program wait return a SimPy event to ``yield``; it has already
+succeeded when there was nothing to wait for::
+
+    p = TrioProcess(trio)
+    p.base(3)
+    p.set("UNITS", 16)
+    p.table(1000, 110, 115, 195, 220)
+    def job():
+        yield p.pwm_control(3, 1, ON, 1000, 1003)   # waits while the FIFO is full
+        yield p.moveabs(300)                        # waits while the move buffer is full
+        yield p.wait_idle()
+    sim.process(job())
+
+The BASIC interpreter (:mod:`.basic`) runs programs through this same class.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator
+from fractions import Fraction
+from typing import Any
+
+from simpy.events import Event
+
+from cosim.controllers.trio.controller import TrioController
+from cosim.controllers.trio.params import as_int, exact
+from cosim.errors import ConfigurationError
+from cosim.timebase import Priority
+
+
+class TrioProcess:
+    """One program's state (its BASE group) and the commands of the modelled BASIC subset.
+
+    Parameters
+    ----------
+    controller : TrioController
+    base : tuple of int
+        Initial BASE group (axis 0 by default, as on the controller).
+    """
+
+    def __init__(self, controller: TrioController, base: tuple[int, ...] = (0,)) -> None:
+        self.controller = controller
+        self.sim = controller.sim
+        self.base_axes: tuple[int, ...] = ()
+        self.base(*base)
+
+    def _done(self) -> Event:
+        event = self.sim.env.event()
+        event.succeed()
+        return event
+
+    def _axes(self, axis: object | None) -> tuple[int, ...]:
+        return self.base_axes if axis is None else (self.controller.axis(axis).number,)
+
+    def base(self, *axes: object) -> None:
+        """``BASE(a, b, ...)``: the axes later commands act on (first = base axis)."""
+        if not axes:
+            raise ConfigurationError.out_of_range("number of BASE axes", 0, f"1..{len(self.controller.axes)}")
+        group = tuple(self.controller.axis(a).number for a in axes)
+        if len(set(group)) != len(group):
+            raise ConfigurationError(f"BASE{group} names an axis twice")
+        self.base_axes = group
+
+    def set(self, name: str, value: object, *, axis: object | None = None) -> None:
+        """``NAME = value`` (``NAME AXIS(n) = value`` with ``axis``): write a parameter."""
+        self.controller.set_param(name, value, axis=self._axes(axis)[0])
+
+    def get(self, name: str, *, axis: object | None = None) -> Fraction:
+        """Read parameter ``NAME`` of the base axis (or ``axis``) now."""
+        return self.controller.get_param(name, axis=self._axes(axis)[0])
+
+    def table(self, start: object, *values: object) -> None:
+        """``TABLE(start, v1, ...)``: write TABLE memory."""
+        self.controller.table(start, *values)
+
+    def table_value(self, index: object) -> Fraction:
+        """``TABLE(n)``: read TABLE memory."""
+        return self.controller.table_value(index)
+
+    def defpos(self, *positions: object, axis: object | None = None) -> None:
+        """``DEFPOS(p1, ...)``: define positions of the BASE axes (applied at the next servo cycle)."""
+        self.controller.defpos(self._axes(axis), positions)
+
+    def move(self, *distances: object, axis: object | None = None) -> Event:
+        """``MOVE(d1, ...)``: relative move of the BASE axes, interpolated."""
+        return self.controller.move(self._axes(axis), distances, absolute=False)
+
+    def moveabs(self, *positions: object, axis: object | None = None) -> Event:
+        """``MOVEABS(p1, ...)``: absolute move of the BASE axes, interpolated."""
+        return self.controller.move(self._axes(axis), positions, absolute=True)
+
+    def wait_idle(self, *, axis: object | None = None) -> Event:
+        """``WAIT IDLE``: until every BASE axis has finished its moves."""
+        return self.controller.wait_idle(self._axes(axis))
+
+    def pwm_control(self, mode: object, *args: object, axis: object | None = None) -> Event:
+        """``PWM_CONTROL(mode, ...)`` on the base axis (or ``axis``); mode 3 may wait for FIFO space."""
+        loaded = self.controller.pwm_control(self._axes(axis)[0], mode, *args)
+        return loaded if loaded is not None else self._done()
+
+    def wa(self, ms: object) -> Event:
+        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ns)."""
+        value = exact(ms, "WA time [ms]")
+        if value < 0:
+            raise ConfigurationError.out_of_range("WA time [ms]", float(value), ">= 0")
+        ticks = value * self.sim.ticks(1, "ms")
+        return self.sim.after(as_int(ticks, "WA time [ms]", "a whole number of ns"))
+
+    def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
+        """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""
+        period = self.controller.period_ns
+        while not condition():
+            yield self.sim.at((self.sim.now // period + 1) * period, Priority.HOST)
+

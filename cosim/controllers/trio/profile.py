@@ -1,0 +1,124 @@
+"""Trapezoidal velocity profiles in exact rational arithmetic.
+
+A move of path length ``L`` [units] from rest to rest with speed ``V``, acceleration ``A`` and
+deceleration ``D`` has three phases (acceleration, constant speed, deceleration)::
+
+    speed
+      Vp |     ______________
+         |    /              \\
+         |   /                \\
+         |__/__________________\\____ t
+           0  t_a          t_a+t_c  t_end = t_a + t_c + t_d
+
+    t_a = Vp/A,  t_d = Vp/D,  t_c = (L - Vp^2/(2A) - Vp^2/(2D)) / Vp
+
+with ``Vp = V`` when the move is long enough, else the triangular peak ``sqrt(2 L A D / (A + D))``.
+Every phase boundary and every position at a rational time is rational, except that peak speed
+and the length of a multi-axis path, which need a square root. Those two roots are taken by
+:func:`sqrt_down`: exact when the radicand is the square of a rational, otherwise rounded *down*
+to a multiple of ``2**-SQRT_BITS`` (as a fixed-point controller would). Rounding the peak down
+leaves a constant-speed phase a few 1e-20 s long, so the move still ends exactly on its target;
+everything after the root is exact.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from math import isqrt
+
+#: Fraction bits of a rounded square root (see :func:`sqrt_down`).
+SQRT_BITS = 64
+
+
+def sqrt_down(value: Fraction, *, bits: int = SQRT_BITS) -> Fraction:
+    """The square root of ``value`` >= 0: exact if it is rational, else rounded down to ``2**-bits``.
+
+    Examples
+    --------
+    >>> sqrt_down(Fraction(9, 4))
+    Fraction(3, 2)
+    >>> r = sqrt_down(Fraction(2))
+    >>> r * r <= 2 < (r + Fraction(1, 2**64)) ** 2
+    True
+    """
+    if value < 0:
+        raise ValueError(f"sqrt_down of a negative value {value}")
+    num, den = value.numerator, value.denominator
+    rn, rd = isqrt(num), isqrt(den)
+    if rn * rn == num and rd * rd == den:
+        return Fraction(rn, rd)
+    scale = 1 << bits
+    return Fraction(isqrt(num * scale * scale // den), scale)
+
+
+@dataclass(frozen=True)
+class Trapezoid:
+    """A rest-to-rest trapezoidal (or triangular) profile over a path of ``length`` units.
+
+    Parameters
+    ----------
+    length : Fraction
+        Path length [units], >= 0.
+    speed, accel, decel : Fraction
+        Programmed speed [units/s] (> 0), acceleration and deceleration [units/s^2] (> 0).
+
+    Examples
+    --------
+    >>> p = Trapezoid.plan(Fraction(300), speed=Fraction(100), accel=Fraction(1000), decel=Fraction(500))
+    >>> p.peak, p.t_accel, p.t_const, p.t_decel, p.t_end
+    (Fraction(100, 1), Fraction(1, 10), Fraction(57, 20), Fraction(1, 5), Fraction(63, 20))
+    >>> p.position(Fraction(1, 10)), p.position(p.t_end)
+    (Fraction(5, 1), Fraction(300, 1))
+    """
+
+    length: Fraction
+    peak: Fraction
+    accel: Fraction
+    decel: Fraction
+    t_accel: Fraction
+    t_const: Fraction
+    t_decel: Fraction
+
+    @classmethod
+    def plan(cls, length: Fraction, *, speed: Fraction, accel: Fraction, decel: Fraction) -> Trapezoid:
+        """Plan the profile (see the module docstring for the formulas)."""
+        if length < 0 or speed <= 0 or accel <= 0 or decel <= 0:
+            raise ValueError(f"Trapezoid needs length >= 0 and speed, accel, decel > 0; got "
+                             f"{length}, {speed}, {accel}, {decel}")
+        if length == 0:
+            zero = Fraction(0)
+            return cls(zero, zero, accel, decel, zero, zero, zero)
+        ramps = speed * speed / (2 * accel) + speed * speed / (2 * decel)
+        peak = speed if length >= ramps else sqrt_down(2 * length * accel * decel / (accel + decel))
+        d_ramps = peak * peak / (2 * accel) + peak * peak / (2 * decel)
+        return cls(length, peak, accel, decel, peak / accel, (length - d_ramps) / peak, peak / decel)
+
+    @property
+    def t_end(self) -> Fraction:
+        """Duration of the move [s]."""
+        return self.t_accel + self.t_const + self.t_decel
+
+    def position(self, t: Fraction) -> Fraction:
+        """Distance travelled along the path at ``t`` [s] after the start [units]."""
+        if t <= 0:
+            return Fraction(0)
+        if t >= self.t_end:
+            return self.length
+        if t < self.t_accel:
+            return self.accel * t * t / 2
+        d_accel = self.peak * self.t_accel / 2
+        if t < self.t_accel + self.t_const:
+            return d_accel + self.peak * (t - self.t_accel)
+        left = self.t_end - t
+        return self.length - self.decel * left * left / 2
+
+    def speed(self, t: Fraction) -> Fraction:
+        """Profile speed at ``t`` [s] after the start [units/s] (VP_SPEED)."""
+        if t <= 0 or t >= self.t_end:
+            return Fraction(0)
+        if t < self.t_accel:
+            return self.accel * t
+        if t < self.t_accel + self.t_const:
+            return self.peak
+        return self.decel * (self.t_end - t)

@@ -1,0 +1,36 @@
+"""Trio raster engraving with a slow host: the FIFO starves and the positions passed before loading are named.
+
+The job of ``trio_raster`` with the host refilling one 64-position chunk every 40 ms while the axis
+uses up 4 positions per ms at 200 mm/s: the FIFO runs empty, the axis passes positions before
+they are loaded, and they fire late, at the load::
+
+    fifo_level   256 ‾‾\\_____/\\_____/\\____      empty between refills
+    gate_late             x x x x   x x x      the positions passed while it was empty
+
+The checks assert that the starving is reproduced and reported: the late positions are listed
+(in user units) in the check's description and counted in its figures.
+"""
+
+from __future__ import annotations
+
+from cosim.checks import ValueAt
+from cosim.scenario import Param, Run
+from cosim.scenarios.trio_raster import LatePositions, raster_job
+
+PARAMETERS = (
+    Param("lines", 2, "", (1, 7), "raster lines (alternating direction)"),
+    Param("positions", 2000, "", (2, 2000), "gate positions per line (lines x positions <= 16000 TABLE entries)"),
+    Param("pitch_um", 50, "um", (10, 1000), "distance between gate positions"),
+    Param("speed", 200.0, "mm/s", (1.0, 1000.0), "raster speed (SPEED of axis 3)"),
+    Param("chunk", 64, "", (1, 256), "positions per PWM_CONTROL(3) load"),
+    Param("refill_ms", 40.0, "ms", (0.0, 1000.0), "host refill period: too slow for the raster speed"),
+    Param("laser", True, "", None, "drive the Laser FMU with the PWM output"),
+)
+UNTIL = "100 ms"
+
+
+def scenario(run: Run) -> None:
+    job = raster_job(run)
+    run.check(LatePositions("trio.axis3.gate_late", programmed=job.lines * job.positions, expect_late=True,
+                            name="starving reproduced: positions passed before they were loaded are reported"))
+    run.check(ValueAt("trio.axis3.fifo_level", None, 0, name="every loaded position was used"))
