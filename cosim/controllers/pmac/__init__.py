@@ -1,0 +1,79 @@
+"""Delta Tau PMAC external time base and Turbo PMAC triggered time base.
+
+A slave axis runs on the time of a master encoder: an encoder conversion table entry
+differentiates the master position every servo cycle into a time-base value, Ix93 points a
+coordinate system at it, Ix94 limits how fast it may change, and the Turbo triggered entry
+freezes, arms and starts motion at a captured master position. See ``docs/pmac.md``.
+
+Modules: :mod:`.units` (I10, servo clock, 2^-23 ms units), :mod:`.encoder` (1/T extension,
+capture), :mod:`.ect` (conversion table), :mod:`.motion` (moves), :mod:`.coord` (coordinate
+system, Ix93/Ix94, slip), :mod:`.servo` (PID design and loop), :mod:`.motor`, :mod:`.ivars`
+(setup text), :mod:`.machine` (the controller), :mod:`.testbench` (plant stand-ins).
+"""
+
+from cosim.controllers.pmac.coord import CoordinateSystem, LimitEvent
+from cosim.controllers.pmac.ect import (
+    ARMED,
+    FROZEN,
+    PMAC_ECT_BASE,
+    RUNNING,
+    TURBO_ECT_BASE,
+    ConversionTable,
+    OneOverTEntry,
+    TimeBaseEntry,
+    TriggeredTimeBaseEntry,
+    TriggerStart,
+    pmac_default_table,
+)
+from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSample, EncoderSource, SignalEncoder
+from cosim.controllers.pmac.ivars import parse_setup
+from cosim.controllers.pmac.machine import Pmac
+from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove
+from cosim.controllers.pmac.motor import Motor
+from cosim.controllers.pmac.servo import MotorModel, PidDesign, PidLoop, design_pid
+from cosim.controllers.pmac.units import (
+    I10_DEFAULT,
+    IX94_DEFAULT,
+    IX94_MAX,
+    ServoClock,
+    formula_percent,
+    percent,
+    scale_factor_for,
+)
+
+__all__ = [
+    "ARMED",
+    "FROZEN",
+    "I10_DEFAULT",
+    "IX94_DEFAULT",
+    "IX94_MAX",
+    "PMAC_ECT_BASE",
+    "RUNNING",
+    "TURBO_ECT_BASE",
+    "ConversionTable",
+    "CoordinateSystem",
+    "Delay",
+    "Dwell",
+    "EncoderChannel",
+    "EncoderSample",
+    "EncoderSource",
+    "LimitEvent",
+    "LinearMove",
+    "Motor",
+    "MotorModel",
+    "OneOverTEntry",
+    "PidDesign",
+    "PidLoop",
+    "Pmac",
+    "ServoClock",
+    "SignalEncoder",
+    "TimeBaseEntry",
+    "TriggerStart",
+    "TriggeredTimeBaseEntry",
+    "design_pid",
+    "formula_percent",
+    "parse_setup",
+    "percent",
+    "pmac_default_table",
+    "scale_factor_for",
+]

@@ -1,0 +1,268 @@
+"""A coordinate system: its time-base source (Ix93), slew limit (Ix94), program and slip.
+
+Every servo cycle, after the conversion table:
+
+1. the source register at address Ix93 is read (the ``%`` command register by default, or a
+   time-base result of the conversion table, e.g. $0729 = 1833);
+2. the actual time-base value moves toward it by at most Ix94 (2^-23 ms per cycle);
+3. the running program (or jog) advances by the actual time-base value.
+
+Ix94 under external time base
+-----------------------------
+When the limit acts while the source is an external (table) time base, the elapsed program time
+falls behind the master: the shortfall ``source - actual`` of that cycle, divided by the
+entry's time-base units per master count, is *slip* in master counts. The coordinate system
+records every cycle in which the limit acted and the accumulated slip; a second, "ideal"
+program clock advanced by the source value itself gives the master-derived positions that the
+slave should have (slip-free), for the sync error.
+
+The first servo cycle of a coordinate system takes the source value as its actual value (no
+slew from an arbitrary power-on value).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING, Protocol
+
+from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner
+from cosim.controllers.pmac.units import IX94_DEFAULT, IX94_MAX, REG_MAX, check_int, hexaddr, percent
+from cosim.errors import ConfigurationError
+from cosim.signals import Signal
+
+if TYPE_CHECKING:
+    from cosim.kernel import Simulation
+
+#: Address of coordinate system 1's ``%`` command register; CS x is at +(x-1)*$100 (Turbo defaults).
+PERCENT_REGISTER_BASE = 0x2000
+
+
+class TimeBaseSource(Protocol):
+    """A register a coordinate system can take its time base from."""
+
+    address: int
+
+    def read(self) -> int:
+        """Current value [2^-23 ms per servo cycle]."""
+        ...
+
+    @property
+    def units_per_count(self) -> Fraction | None:
+        """Time-base units per master count (None for a software register: not external)."""
+        ...
+
+
+class PercentRegister:
+    """The ``%`` command register of a coordinate system (set by the host's ``%n``).
+
+    Parameters
+    ----------
+    address : int
+    i10 : int
+        Servo interrupt time; ``%100`` writes I10.
+    """
+
+    units_per_count: Fraction | None = None
+
+    def __init__(self, address: int, i10: int) -> None:
+        self.address = address
+        self.i10 = i10
+        self.value = i10
+
+    def read(self) -> int:
+        return self.value
+
+    def command(self, pct: int | Fraction) -> int:
+        """``%n``: write ``round(n * I10 / 100)``, saturated at 8,388,607 (the largest implementable)."""
+        exact = Fraction(pct)
+        if exact < 0:
+            raise ConfigurationError.out_of_range("%n (feedrate override)", pct,
+                                                  f">= 0 (up to {self.max_percent():.2f})")
+        self.value = min(REG_MAX, round(exact * self.i10 / 100))
+        return self.value
+
+    def max_percent(self) -> float:
+        """Largest implementable ``%`` value, ``(2^23 / I10) * 100``."""
+        return float(Fraction(1 << 23, self.i10) * 100)
+
+
+@dataclass(frozen=True)
+class LimitEvent:
+    """A servo cycle in which Ix94 limited the time base.
+
+    Attributes
+    ----------
+    cycle, t_ns : int
+        Servo cycle and its instant [ns].
+    source, actual : int
+        Source value and the limited actual value [2^-23 ms].
+    slip_counts : Fraction or None
+        Accumulated slip after this cycle [master counts] (None if the source is not external).
+    """
+
+    cycle: int
+    t_ns: int
+    source: int
+    actual: int
+    slip_counts: Fraction | None
+
+
+class CoordinateSystem:
+    """Coordinate system ``&x`` with time-base control.
+
+    Parameters
+    ----------
+    sim : Simulation
+    number : int
+        Coordinate system number x (1..8).
+    i10 : int
+        Servo interrupt time [2^-23 ms].
+    axes : iterable of str
+        Axis letters (positions start at 0).
+    ix94 : int
+        Ix94, time-base slew limit [2^-23 ms per servo cycle], 0..8,388,607.
+    device : str
+        Trace name prefix.
+    """
+
+    def __init__(self, sim: Simulation, number: int, *, i10: int, axes: Iterable[str] = ("X",),
+                 ix94: int = IX94_DEFAULT, device: str = "pmac") -> None:
+        self.number = check_int("coordinate system number", number, 1, 8)
+        self.sim = sim
+        self.i10 = i10
+        self.ix94 = check_int(f"I{number}94 (Ix94)", ix94, 0, IX94_MAX)
+        self.percent_register = PercentRegister(PERCENT_REGISTER_BASE + (number - 1) * 0x100, i10)
+        self.ix93 = self.percent_register.address
+        self.source: TimeBaseSource = self.percent_register
+        self.axes = {axis: Fraction(0) for axis in axes}
+        self.actual = 0
+        self.source_value = 0
+        self.slip_units = 0
+        self.limit_events: list[LimitEvent] = []
+        self.notes: list[tuple[int, str]] = []
+        self._runner: ProgramRunner | None = None
+        self._ideal: ProgramRunner | None = None
+        self._pending: tuple[list[Item], str] | None = None
+        self._started = False
+        p = f"{device}.cs{number}"
+        self._tb = Signal(sim, f"{p}.timebase", kind="int", unit="2^-23 ms", description="actual time-base value")
+        self._pct = Signal(sim, f"{p}.timebase_pct", kind="real", unit="%", description="actual time base in %")
+        self._src = Signal(sim, f"{p}.timebase_source", kind="int", unit="2^-23 ms",
+                           description="value of the register Ix93 points at")
+        self._slip = Signal(sim, f"{p}.slip", kind="int", unit="counts",
+                            description="master counts lost to the Ix94 limit (truncated)")
+        self._active = Signal(sim, f"{p}.ix94_active", kind="bit", description="Ix94 limited the time base")
+
+    # -- configuration ---------------------------------------------------------------------
+    @property
+    def external(self) -> bool:
+        """True if the time-base source is a conversion-table result (external time base)."""
+        return self.source.units_per_count is not None
+
+    def set_source(self, address: int, source: TimeBaseSource) -> None:
+        """Point Ix93 at ``source`` (the machine resolves and validates the address)."""
+        self.ix93 = address
+        self.source = source
+
+    def set_ix94(self, value: object, *, where: str = "") -> None:
+        """Set Ix94 (0..8,388,607)."""
+        self.ix94 = check_int(f"I{self.number}94 (Ix94)", value, 0, IX94_MAX, where=where)
+
+    def command_percent(self, pct: int | Fraction) -> int:
+        """Host ``%n``; acts only while Ix93 points at this system's ``%`` register."""
+        return self.percent_register.command(pct)
+
+    @property
+    def percent(self) -> Fraction:
+        """Actual time base in % (what a ``%`` query reports, whatever the source)."""
+        return percent(self.actual, self.i10)
+
+    # -- programs ---------------------------------------------------------------------------
+    def run_program(self, items: Iterable[Item]) -> None:
+        """Start a motion program (a list of moves); it begins at the next servo cycle."""
+        if self._runner is not None and not self._runner.done:
+            raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
+        self._pending = (list(items), "program")
+
+    def jog(self, target: int | Fraction, *, speed_per_ms: int | Fraction, ta_ms: int | Fraction = 10,
+            axis: str = "X") -> None:
+        """Non-programmed move (jog) to ``target`` [axis units] at ``speed_per_ms`` (Ixx22) with TA Ixx20.
+
+        It runs under the coordinate system's time base, like a programmed move.
+        """
+        self.run_program([LinearMove(target, Fraction(speed_per_ms) * 1000, ta_ms, axis)])
+
+    @property
+    def program_done(self) -> bool:
+        """True when no program or jog is running or pending."""
+        return self._pending is None and (self._runner is None or self._runner.done)
+
+    def position(self, axis: str) -> Fraction:
+        """Commanded position of ``axis`` [axis units]."""
+        return self._runner.position(axis) if self._runner is not None else self.axes[axis]
+
+    def ideal_position(self, axis: str) -> Fraction:
+        """Master-derived (slip-free) position of ``axis`` [axis units]."""
+        return self._ideal.position(axis) if self._ideal is not None else self.axes[axis]
+
+    @property
+    def slip_counts(self) -> Fraction | None:
+        """Accumulated slip [master counts] (None if the source is not external)."""
+        upc = self.source.units_per_count
+        return None if upc is None else Fraction(self.slip_units) / upc
+
+    @property
+    def limit_cycles(self) -> list[int]:
+        """Servo cycles in which Ix94 acted."""
+        return [e.cycle for e in self.limit_events]
+
+    # -- servo cycle ------------------------------------------------------------------------
+    def update(self, cycle: int, t_ns: int) -> None:
+        """One servo cycle: read the source, apply Ix94, advance the program."""
+        source = self.source.read()
+        self.source_value = source
+        if not self._started:
+            self.actual = source
+            self._started = True
+        diff = source - self.actual
+        step = max(-self.ix94, min(self.ix94, diff))
+        self.actual += step
+        limited = step != diff
+        external = self.external
+        if limited:
+            if external:
+                self.slip_units += source - self.actual
+                if not any("Ix94" in n for _, n in self.notes):
+                    self.notes.append((t_ns, f"Ix94 limit acted under external time base at cycle {cycle}: "
+                                             "position synchronization to the master is lost"))
+            self.limit_events.append(LimitEvent(cycle, t_ns, source, self.actual, self.slip_counts))
+        self._advance_program(source if external else self.actual, t_ns)
+        self._tb.set(self.actual)
+        self._pct.set(float(self.percent))
+        self._src.set(source)
+        slip = self.slip_counts
+        self._slip.set(int(slip) if slip is not None else 0)
+        self._active.set(limited)
+
+    def _advance_program(self, ideal_units: int, t_ns: int) -> None:
+        if self._pending is not None:
+            items, _kind = self._pending
+            self._pending = None
+            start = {axis: self.position(axis) for axis in self.axes}
+            self._runner = ProgramRunner(items, start)
+            self._ideal = ProgramRunner(items, {axis: self.ideal_position(axis) for axis in self.axes})
+            self.axes = start
+        if self._runner is None or self._ideal is None:
+            return
+        if self._runner.in_dwell and self.external and not any("DWELL" in n for _, n in self.notes):
+            self.notes.append((t_ns, "DWELL under external time base: it runs in real time, so "
+                                     "synchronism with the master is lost"))
+        self._runner.advance(self.actual, self.i10)
+        self._ideal.advance(ideal_units, self.i10)
+
+    def describe_source(self) -> str:
+        """Ix93 as text, e.g. ``$2000 (CS1 % register)``."""
+        kind = "external time base" if self.external else "% command register"
+        return f"{hexaddr(self.ix93)} ({kind})"

@@ -1,0 +1,129 @@
+"""Ready-made PMAC set-ups for tests and scenarios (written as the setup text a user keeps).
+
+* :func:`external_time_base` -- Turbo table with a 1/T entry on the master channel and an
+  untriggered time-base entry; CS1 follows it (``I5193=@I8002``).
+* :func:`triggered_time_base` -- a Turbo triggered time-base entry on the master channel with the
+  registration sensor as capture trigger; CS1 follows it.
+
+Both put motor 1 on axis X of CS1: ideal (act = cmd) by default; with ``slave=MotorModel(...)``
+a PID designed for ``bandwidth_hz`` closes the loop around a :class:`DcMotorStandIn`; with
+``loop=`` a given loop is used and the caller connects ``rig.motor.feedback``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from cosim.controllers.pmac.coord import CoordinateSystem
+from cosim.controllers.pmac.ect import ARMED, FROZEN, TimeBaseEntry, TriggeredTimeBaseEntry
+from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSource
+from cosim.controllers.pmac.machine import Pmac
+from cosim.controllers.pmac.motion import Item
+from cosim.controllers.pmac.motor import Motor
+from cosim.controllers.pmac.servo import MotorModel, PidDesign, PidLoop, design_pid
+from cosim.controllers.pmac.testbench import DcMotorStandIn
+from cosim.controllers.pmac.units import I10_DEFAULT, IX94_MAX
+from cosim.signals import Signal
+from cosim.timebase import Priority
+
+if TYPE_CHECKING:
+    from cosim.kernel import Simulation
+
+#: Master encoder channel used by the rigs (Turbo Servo IC 0, as in the manual's I8010=$978008).
+MASTER_CHANNEL = 0x078008
+#: Its capture register (dummy-read address): channel + 3.
+MASTER_CAPTURE = MASTER_CHANNEL + 3
+
+
+E = TypeVar("E", TimeBaseEntry, TriggeredTimeBaseEntry)
+
+
+@dataclass
+class Rig(Generic[E]):
+    """What a rig built: the controller and the parts a test or scenario looks at."""
+
+    pmac: Pmac
+    cs: CoordinateSystem
+    motor: Motor
+    channel: EncoderChannel
+    entry: E
+    setup: str
+    design: PidDesign | None = None
+    plant: DcMotorStandIn | None = None
+
+
+def _finish(sim: Simulation, pmac: Pmac, setup: str, master: EncoderSource, trigger: Signal | None,
+            loop: PidLoop | None, slave: MotorModel | None, bandwidth_hz: float
+            ) -> tuple[CoordinateSystem, Motor, EncoderChannel, PidDesign | None, DcMotorStandIn | None]:
+    channel = pmac.add_channel(MASTER_CHANNEL, master, trigger=trigger, name="master")
+    pmac.load_setup(setup, source="rig setup")
+    cs = pmac.coordinate_system(1)
+    design = design_pid(slave, period_s=pmac.clock.period_s, bandwidth_hz=bandwidth_hz) if slave else None
+    motor = pmac.add_motor(1, cs=1, loop=PidLoop(design) if design is not None else loop)
+    plant = None
+    if slave is not None:
+        plant = DcMotorStandIn(sim, motor.dac, slave)
+        motor.feedback = plant.encoder_count
+    return cs, motor, channel, design, plant
+
+
+def external_time_base(sim: Simulation, master: EncoderSource, *, scale_factor: int, ix94: int = IX94_MAX,
+                       i10: int = I10_DEFAULT, loop: PidLoop | None = None, slave: MotorModel | None = None,
+                       bandwidth_hz: float = 50.0) -> Rig[TimeBaseEntry]:
+    """Untriggered external time base from the 1/T position of ``master`` (not started)."""
+    setup = (f"I10={i10}\n"
+             f"I8000=${MASTER_CHANNEL:06X}        ; 1/T extension of the master channel (1/32 count)\n"
+             "I8001=$403501         ; time base ($4) from the 1/T result at $3501\n"
+             f"I8002={scale_factor}  ; SCALE_FACTOR = 131072 / real-time input frequency\n"
+             "I5193=@I8002          ; CS1 time base = result of the time-base entry ($3503)\n"
+             f"I5194={ix94}         ; time-base slew limit\n")
+    pmac = Pmac(sim, i10=i10)
+    cs, motor, channel, design, plant = _finish(sim, pmac, setup, master, None, loop, slave, bandwidth_hz)
+    entry = pmac.table.entry_at(0x3502)
+    assert isinstance(entry, TimeBaseEntry)
+    return Rig(pmac, cs, motor, channel, entry, setup, design, plant)
+
+
+def triggered_time_base(sim: Simulation, master: EncoderSource, trigger: Signal, *, scale_factor: int,
+                        method: int = FROZEN, ix94: int = IX94_MAX, i10: int = I10_DEFAULT,
+                        loop: PidLoop | None = None, slave: MotorModel | None = None,
+                        bandwidth_hz: float = 50.0) -> Rig[TriggeredTimeBaseEntry]:
+    """Turbo triggered time base on ``master`` with ``trigger`` as capture input (not started)."""
+    setup = (f"I10={i10}\n"
+             f"I8000=${method:X}{MASTER_CHANNEL:05X}     ; triggered time base: $9 frozen, $B armed, $A running\n"
+             f"I8001={scale_factor}  ; SCALE_FACTOR = 16384 / real-time input frequency\n"
+             "I5193=@I8001          ; CS1 time base = result of the triggered entry ($3502)\n"
+             f"I5194={ix94}\n")
+    pmac = Pmac(sim, i10=i10)
+    cs, motor, channel, design, plant = _finish(sim, pmac, setup, master, trigger, loop, slave, bandwidth_hz)
+    entry = pmac.table.entry_at(0x3501)
+    assert isinstance(entry, TriggeredTimeBaseEntry)
+    return Rig(pmac, cs, motor, channel, entry, setup, design, plant)
+
+
+def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: list[Item], *, t_freeze_ns: int,
+                    arm_after_ns: int, dummy_read: bool) -> None:
+    """The manual's triggered-move recipe, as host actions (priority HOST).
+
+    At ``t_freeze_ns`` the motion program freezes the entry (``I8000=$978008``), optionally does
+    the dummy read of the capture register (``X:$07800B``), and starts ``program``. After
+    ``arm_after_ns`` the PLC arms the entry if it is still frozen (``IF (I8000=$978008)
+    I8000=$B78008``). If both fall between the same two servo interrupts and there is no dummy
+    read, no servo cycle sees the entry frozen: the stale-capture hazard.
+    """
+    frozen = (FROZEN << 20) | MASTER_CHANNEL
+    armed = (ARMED << 20) | MASTER_CHANNEL
+
+    def motion_program_and_plc() -> Generator[Any, Any, None]:
+        yield sim.at(t_freeze_ns, Priority.HOST)
+        rig.pmac.set_ivar(8000, frozen)
+        if dummy_read:
+            rig.pmac.read_x(MASTER_CAPTURE)
+        rig.cs.run_program(program)
+        yield sim.at(t_freeze_ns + arm_after_ns, Priority.HOST)
+        if rig.pmac.get_ivar(8000) == frozen:
+            rig.pmac.set_ivar(8000, armed)
+
+    sim.process(motion_program_and_plc())

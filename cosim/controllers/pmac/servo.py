@@ -1,0 +1,223 @@
+"""PID position loop at the servo rate, with gains designed by python-control.
+
+The slave axis (DC motor, amplifier and encoder) is modelled for design as seen from the DAC::
+
+    G(s) = K / (s * (tau * s + 1))      [counts per DAC bit]
+
+sampled with a zero-order hold at the servo period (the DAC holds its value for a cycle). The
+controller is a PID with a filtered derivative, in series form::
+
+    C(s) = Kc * (tau * s + 1) / (s / w_f + 1) * (s + w_i) / s
+
+whose derivative zero cancels the motor pole, with ``w_i = w_c / 10`` and
+``w_f = min(10 * w_c, Nyquist / 2)``. It is discretised with the Tustin rule and ``Kc`` is
+scaled so that the *discrete* loop crosses 0 dB exactly at the requested bandwidth ``w_c``.
+The design reports the crossover, the closed-loop -3 dB bandwidth, the gain and phase margins
+and the largest closed-loop pole radius (stable at the servo rate if below 1).
+
+The DAC output is a 16-bit value (+-32767, about +-10 V); the controller state keeps running
+when the output saturates (no anti-windup).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import control
+import numpy as np
+
+from cosim.errors import ConfigurationError
+
+#: Largest DAC output [bits] of a 16-bit DAC.
+DAC_MAX = 32767
+
+
+@dataclass(frozen=True)
+class MotorModel:
+    """Slave axis as seen from the DAC: ``G(s) = K / (s (tau s + 1))``.
+
+    Parameters
+    ----------
+    gain_counts_per_s_per_bit : float
+        K, steady speed per DAC bit [counts/s per bit], > 0.
+    tau_s : float
+        Mechanical time constant [s], > 0.
+    """
+
+    gain_counts_per_s_per_bit: float
+    tau_s: float
+
+    def __post_init__(self) -> None:
+        for name, value in (("gain_counts_per_s_per_bit", self.gain_counts_per_s_per_bit), ("tau_s", self.tau_s)):
+            if not value > 0:
+                raise ConfigurationError.out_of_range(name, value, "> 0")
+
+    def transfer_function(self) -> Any:
+        """The continuous plant ``G(s)`` as a python-control transfer function."""
+        return control.tf([self.gain_counts_per_s_per_bit], [self.tau_s, 1.0, 0.0])
+
+
+@dataclass(frozen=True)
+class PidDesign:
+    """A designed PID position loop and its figures.
+
+    Attributes
+    ----------
+    period_s : float
+        Servo period [s].
+    kp : float
+        Proportional gain [DAC bits per count].
+    ki : float
+        Integral gain [DAC bits per count per s].
+    kd : float
+        Derivative gain [DAC bits per count/s].
+    derivative_filter_hz : float
+        Corner of the derivative filter [Hz].
+    crossover_hz : float
+        Open-loop 0 dB crossover (the requested bandwidth) [Hz].
+    bandwidth_hz : float
+        Closed-loop -3 dB bandwidth [Hz].
+    gain_margin_db : float
+        Gain margin [dB] (inf if the phase never crosses -180 deg).
+    phase_margin_deg : float
+        Phase margin [deg].
+    max_pole_radius : float
+        Largest |z| of the closed-loop poles (< 1: stable at the servo rate).
+    a, b, c, d : tuple
+        Discrete controller state space (error [counts] in, DAC [bits] out).
+    """
+
+    period_s: float
+    kp: float
+    ki: float
+    kd: float
+    derivative_filter_hz: float
+    crossover_hz: float
+    bandwidth_hz: float
+    gain_margin_db: float
+    phase_margin_deg: float
+    max_pole_radius: float
+    a: tuple[tuple[float, ...], ...]
+    b: tuple[float, ...]
+    c: tuple[float, ...]
+    d: float
+
+    @property
+    def stable(self) -> bool:
+        """True if every closed-loop pole is inside the unit circle."""
+        return self.max_pole_radius < 1.0
+
+    def summary(self) -> str:
+        """Human-readable design report (bandwidth, margins, gains)."""
+        return (
+            f"PID position loop at {1 / self.period_s:.1f} Hz servo rate: "
+            f"crossover {self.crossover_hz:.1f} Hz, closed-loop bandwidth {self.bandwidth_hz:.1f} Hz, "
+            f"phase margin {self.phase_margin_deg:.1f} deg, gain margin {self.gain_margin_db:.1f} dB, "
+            f"largest closed-loop pole |z| = {self.max_pole_radius:.4f} "
+            f"({'stable' if self.stable else 'UNSTABLE'}); "
+            f"Kp = {self.kp:.4g} bits/count, Ki = {self.ki:.4g} bits/(count s), Kd = {self.kd:.4g} bits s/count"
+        )
+
+    def __str__(self) -> str:
+        return self.summary()
+
+
+def _closed_loop_bandwidth_hz(closed: Any, period_s: float) -> float:
+    """First frequency where the discrete closed loop falls 3 dB below its DC gain [Hz]."""
+    nyquist = math.pi / period_s
+    dc = abs(complex(closed(1.0)))
+    target = dc / math.sqrt(2.0)
+
+    def gain(w: float) -> float:
+        return abs(complex(closed(np.exp(1j * w * period_s))))
+
+    grid = np.logspace(-1, math.log10(nyquist * 0.999), 2000)
+    below = [w for w in grid if gain(w) < target]
+    if not below:
+        return nyquist / (2 * math.pi)
+    hi = below[0]
+    lo = grid[max(0, int(np.searchsorted(grid, hi)) - 1)]
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if gain(mid) >= target else (lo, mid)
+    return 0.5 * (lo + hi) / (2 * math.pi)
+
+
+def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integral_ratio: float = 10.0,
+               derivative_filter_ratio: float = 10.0) -> PidDesign:
+    """Design the PID position loop for a stated bandwidth.
+
+    Parameters
+    ----------
+    motor : MotorModel
+    period_s : float
+        Servo period [s] (``ServoClock.period_s``).
+    bandwidth_hz : float
+        Open-loop crossover to place [Hz], 0 < bandwidth <= servo rate / 10.
+    integral_ratio : float
+        ``w_c / w_i`` (> 1).
+    derivative_filter_ratio : float
+        ``w_f / w_c`` (> 1; capped at half the Nyquist frequency).
+
+    Returns
+    -------
+    PidDesign
+    """
+    rate_hz = 1.0 / period_s
+    if not 0 < bandwidth_hz <= rate_hz / 10:
+        raise ConfigurationError.out_of_range("bandwidth_hz", bandwidth_hz, f"0 < bandwidth <= servo rate / 10 "
+                                              f"= {rate_hz / 10:.1f} Hz")
+    for name, value in (("integral_ratio", integral_ratio), ("derivative_filter_ratio", derivative_filter_ratio)):
+        if not value > 1:
+            raise ConfigurationError.out_of_range(name, value, "> 1")
+    wc = 2 * math.pi * bandwidth_hz
+    wi = wc / integral_ratio
+    wf = min(derivative_filter_ratio * wc, math.pi / period_s / 2)
+    tau = motor.tau_s
+    shape = control.tf([tau, 1.0], [1.0 / wf, 1.0]) * control.tf([1.0, wi], [1.0, 0.0])
+    plant_d = control.sample_system(motor.transfer_function(), period_s, method="zoh")
+    shape_d = control.sample_system(shape, period_s, method="tustin")
+    kc = 1.0 / abs(complex((plant_d * shape_d)(np.exp(1j * wc * period_s))))
+    controller = shape_d * kc
+    loop = plant_d * controller
+    gm, pm, _sm, _wpc, _wgc, _wms = control.stability_margins(loop, method="frd")
+    closed = control.feedback(loop, 1)
+    radius = float(np.max(np.abs(control.poles(closed))))
+    ss = control.ss(controller)
+    ki = kc * wi
+    kp = kc * (1 + tau * wi) - ki / wf
+    kd = kc * tau - kp / wf
+    return PidDesign(
+        period_s=period_s, kp=kp, ki=ki, kd=kd, derivative_filter_hz=wf / (2 * math.pi), crossover_hz=bandwidth_hz,
+        bandwidth_hz=_closed_loop_bandwidth_hz(closed, period_s),
+        gain_margin_db=float(20 * math.log10(gm)) if np.isfinite(gm) and gm > 0 else math.inf,
+        phase_margin_deg=float(pm), max_pole_radius=radius,
+        a=tuple(tuple(float(v) for v in row) for row in np.asarray(ss.A)),
+        b=tuple(float(v) for v in np.asarray(ss.B).ravel()),
+        c=tuple(float(v) for v in np.asarray(ss.C).ravel()),
+        d=float(np.asarray(ss.D).ravel()[0]),
+    )
+
+
+class PidLoop:
+    """The running PID: one update per servo cycle, DAC output in 16-bit bits.
+
+    Parameters
+    ----------
+    design : PidDesign
+    """
+
+    def __init__(self, design: PidDesign) -> None:
+        self.design = design
+        self._x = [0.0] * len(design.b)
+
+    def update(self, error_counts: float) -> int:
+        """Following error [counts] in, DAC value [bits] out (clamped to +-32767)."""
+        d = self.design
+        x = self._x
+        u = sum(ci * xi for ci, xi in zip(d.c, x, strict=True)) + d.d * error_counts
+        self._x = [sum(aij * xj for aij, xj in zip(row, x, strict=True)) + bi * error_counts
+                   for row, bi in zip(d.a, d.b, strict=True)]
+        return max(-DAC_MAX, min(DAC_MAX, round(u)))

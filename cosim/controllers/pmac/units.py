@@ -1,0 +1,240 @@
+"""PMAC units: the servo clock (I10) and time-base values in 2^-23 ms, in exact integers.
+
+PMAC measures time in units of 2^-23 ms (8,388,608 units = 1 ms). I10 is the servo interrupt
+time in those units; a coordinate system's time-base value is in the same units per servo cycle,
+so 100 % is a time-base value equal to I10.
+
+Servo interrupt instants
+------------------------
+I10 is rarely a whole number of nanoseconds (the default 3,713,707 is 442,708.37 ns). The model
+never rounds the period and never accumulates it: servo interrupt ``k`` is at::
+
+    t_k = t0 + floor(k * I10 * 10**6 / 2**23)   [ns]
+
+computed exactly from ``k``. Consecutive interrupts are therefore 442,708 or 442,709 ns apart with
+the default I10, and their average is exactly I10 * 10**6 / 2**23 ns: the interrupt count never
+drifts from the real-time clock by more than 1 ns.
+
+Examples
+--------
+>>> clock = ServoClock()
+>>> [clock.t_ns(k) for k in range(4)]
+[0, 442708, 885416, 1328125]
+>>> ServoClock.from_period_ns(250_000).i10
+2097152
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from cosim.errors import ConfigurationError
+
+#: Time units per millisecond (time-base values and I10 are in 2^-23 ms).
+UNITS_PER_MS = 1 << 23
+#: Largest value of a signed 24-bit PMAC register (I10, Ix94, time-base values).
+REG_MAX = (1 << 23) - 1
+#: Smallest value of a signed 24-bit PMAC register.
+REG_MIN = -(1 << 23)
+#: Mask of a 24-bit register.
+REG_MASK = (1 << 24) - 1
+#: Default servo interrupt time (I10), about 442.7 us.
+I10_DEFAULT = 3_713_707
+#: Default Ix94 (time-base slew per servo cycle): 0 -> 100 % in about one second.
+IX94_DEFAULT = 1644
+#: Largest Ix94.
+IX94_MAX = REG_MAX
+#: Nanoseconds per millisecond.
+NS_PER_MS = 10**6
+
+
+def hexaddr(value: int, digits: int = 4) -> str:
+    """PMAC-style hex text of an address or register value, e.g. ``$0729``."""
+    return f"${value:0{digits}X}"
+
+
+class Reg(int):
+    """An int shown as PMAC hex and decimal in error messages: ``$0729 (1833)``.
+
+    Examples
+    --------
+    >>> Reg(1833)
+    $0729 (1833)
+    >>> Reg(0xC, digits=1)
+    $C
+    """
+
+    digits: int
+    decimal: bool
+
+    def __new__(cls, value: int, digits: int = 4, *, decimal: bool | None = None) -> Reg:
+        obj = super().__new__(cls, value)
+        obj.digits = digits
+        obj.decimal = digits > 1 if decimal is None else decimal
+        return obj
+
+    def __repr__(self) -> str:
+        text = hexaddr(int(self), self.digits)
+        return f"{text} ({int(self)})" if self.decimal else text
+
+
+def wrap24(value: int) -> int:
+    """Sign-extend the low 24 bits of ``value`` (what a 24-bit register difference gives)."""
+    return ((value + (1 << 23)) & REG_MASK) - (1 << 23)
+
+
+def saturate24(value: int) -> int:
+    """Clamp ``value`` to the signed 24-bit range ``-2^23 .. 2^23-1``."""
+    return max(REG_MIN, min(REG_MAX, value))
+
+
+def check_int(name: str, value: object, low: int, high: int, *, where: str = "", unit: str = "") -> int:
+    """Accept an integer (not a float or bool) in ``low..high``; else raise naming the range.
+
+    Parameters
+    ----------
+    name : str
+        Vendor name of the parameter, e.g. ``"Ix94"``.
+    value : object
+        The value given.
+    low, high : int
+        Inclusive bounds.
+    where : str
+        Location prefix for the message (setup file and line).
+    unit : str
+        Unit text appended to the allowed range.
+    """
+    if isinstance(value, Fraction) and value.denominator == 1:
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        allowed = f"integers {low}..{high}" + (f" {unit}" if unit else "")
+        shown = value if isinstance(value, int | str) else _Plain(value)
+        raise ConfigurationError.out_of_range(name, shown, allowed, where=where)
+    return value
+
+
+class _Plain:
+    """Shows a number the way the user wrote it (``2184.5``, ``4369/2``) in messages."""
+
+    def __init__(self, value: object) -> None:
+        self.value = value
+
+    def __repr__(self) -> str:
+        return str(self.value)
+
+
+@dataclass(frozen=True)
+class ServoClock:
+    """The servo interrupt clock defined by I10.
+
+    Parameters
+    ----------
+    i10 : int
+        Servo interrupt time, I10 [2^-23 ms], 1..8,388,607 (0 would stop the clock).
+    t0_ns : int
+        Instant of servo interrupt 0 [ns].
+    """
+
+    i10: int = I10_DEFAULT
+    t0_ns: int = 0
+
+    def __post_init__(self) -> None:
+        check_int("I10 (servo interrupt time)", self.i10, 1, REG_MAX, unit="(2^-23 ms)")
+        check_int("t0_ns", self.t0_ns, 0, 1 << 62, unit="ns")
+
+    @classmethod
+    def from_period_ns(cls, period_ns: int, *, t0_ns: int = 0) -> ServoClock:
+        """The clock whose period is exactly ``period_ns`` (a multiple of 15,625 ns).
+
+        Raises
+        ------
+        ConfigurationError
+            If no integer I10 gives that period exactly (I10 = period_ns * 2^23 / 10^6).
+        """
+        i10 = Fraction(period_ns * UNITS_PER_MS, NS_PER_MS)
+        if i10.denominator != 1:
+            raise ConfigurationError.out_of_range(
+                "servo period_ns", period_ns,
+                "multiples of 15625 ns (I10 = period_ns * 2^23 / 10^6 must be an integer); "
+                "use ServoClock(i10=...) for other periods")
+        return cls(int(i10), t0_ns)
+
+    @property
+    def period_ns(self) -> Fraction:
+        """Exact servo period [ns] (usually not an integer)."""
+        return Fraction(self.i10 * NS_PER_MS, UNITS_PER_MS)
+
+    @property
+    def rate_hz(self) -> Fraction:
+        """Exact servo interrupt rate [Hz]."""
+        return Fraction(10**9) / self.period_ns
+
+    @property
+    def period_s(self) -> float:
+        """Servo period [s] as a float: for controller design only, never for time keeping."""
+        return float(self.period_ns) / 1e9
+
+    def t_ns(self, k: int) -> int:
+        """Instant of servo interrupt ``k`` [ns]: ``t0 + floor(k * I10 * 10^6 / 2^23)``."""
+        return self.t0_ns + (k * self.i10 * NS_PER_MS) // UNITS_PER_MS
+
+    def first_cycle_at_or_after(self, t_ns: int) -> int:
+        """Smallest ``k`` with ``t_ns(k) >= t_ns``."""
+        if t_ns <= self.t0_ns:
+            return 0
+        k = ((t_ns - self.t0_ns) * UNITS_PER_MS) // (self.i10 * NS_PER_MS)
+        while self.t_ns(k) < t_ns:
+            k += 1
+        return k
+
+
+def percent(timebase: int | Fraction, i10: int) -> Fraction:
+    """Time-base value as a feedrate-override percentage: ``100 * value / I10`` (exact)."""
+    return Fraction(100) * timebase / i10
+
+
+def timebase_for_percent(pct: int | Fraction, i10: int) -> Fraction:
+    """Time-base value (2^-23 ms per servo cycle) of ``pct`` percent: ``pct * I10 / 100``."""
+    return Fraction(pct) * i10 / 100
+
+
+def scale_factor_for(rtif_counts_per_ms: int | Fraction, *, triggered: bool = False) -> int:
+    """SCALE_FACTOR of a time-base entry for a real-time input frequency (RTIF).
+
+    Parameters
+    ----------
+    rtif_counts_per_ms : int or Fraction
+        Master count rate [counts/ms] at which the time base is 100 %.
+    triggered : bool
+        True for the Turbo triggered entry (1/256 count: SF = 2^14 / RTIF); False for the
+        untriggered entry on a 1/T source (1/32 count: SF = 2^17 / RTIF).
+
+    Raises
+    ------
+    ConfigurationError
+        If the scale factor is not an integer (choose RTIF as a power of two).
+
+    Examples
+    --------
+    >>> scale_factor_for(64)
+    2048
+    >>> scale_factor_for(256, triggered=True)
+    64
+    """
+    numerator = 1 << (14 if triggered else 17)
+    rtif = Fraction(rtif_counts_per_ms)
+    if rtif <= 0:
+        raise ConfigurationError.out_of_range("real-time input frequency", rtif_counts_per_ms, "> 0 counts/ms")
+    sf = numerator / rtif
+    if sf.denominator != 1 or not 1 <= sf <= REG_MAX:
+        raise ConfigurationError.out_of_range(
+            "SCALE_FACTOR", sf, f"integers 1..{REG_MAX}: {numerator} / RTIF must be whole, "
+            "so choose the real-time input frequency as a power of two in counts/ms")
+    return int(sf)
+
+
+def formula_percent(scale_factor: int, input_freq_counts_per_ms: int | Fraction, *,
+                    triggered: bool = False) -> Fraction:
+    """The manual's time-base formula: ``% = 100 * SF * INPUT_FREQ / 2^17`` (2^14 triggered)."""
+    return Fraction(100 * scale_factor) * Fraction(input_freq_counts_per_ms) / (1 << (14 if triggered else 17))

@@ -1,0 +1,60 @@
+"""Turbo PMAC stale-capture hazard: freeze and arm in one servo interval, so a stale capture starts motion early.
+
+The entry is left running ($A), so nothing reads the capture register when mark 1 passes: the
+capture flag stays set. The motion program freezes the entry and the PLC arms it 100 us later,
+between the same two servo interrupts (a lightly loaded Turbo PMAC), so no servo cycle sees it
+frozen and nothing resets the trigger logic. The armed entry sees the old flag at once::
+
+    mark       __|‾|_______________________________|‾|____      mark 1 (500), mark 2 (1500)
+    flag       __|‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|___________
+    servo      |    |    |    |    |    |    |    |    |
+    freeze/arm                        ^^
+    method     $A ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|$A (stale start, ~680 counts before mark 2)
+
+The checks assert that the hazard is reproduced: time zero is mark 1 and the entry runs before
+mark 2. With ``--set dummy_read=true`` the program reads X:$07800B after freezing (the manual's
+fix), the start is correct and both checks FAIL; ``pmac_stale_capture_fix`` is that run with
+checks for the correct start.
+"""
+
+from __future__ import annotations
+
+from cosim.checks import ValueAt
+from cosim.controllers.pmac import RUNNING, LinearMove, rigs
+from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.scenario import Param, Run
+
+PARAMETERS = (
+    Param("dummy_read", False, "", None, "read the capture register after freezing (the fix)"),
+    Param("t_freeze_ms", 12.0, "ms", (9.0, 20.0), "when the motion program freezes the entry"),
+    Param("arm_after_us", 100, "us", (1, 5000), "PLC arms this long after the freeze"),
+)
+UNTIL = "40 ms"
+
+
+def scenario(run: Run) -> None:
+    sim, p = run.sim, run.p
+    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
+    rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
+    clock = rig.pmac.clock
+    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(sim.ticks(p.t_freeze_ms, "ms"))) + 1_000
+    rigs.freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze,
+                         arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=p.dummy_read)
+    rig.pmac.start()
+
+    t_mark2 = belt.mark_times[1][0]
+    run.check(ValueAt("pmac.ect.time_zero_pos", None, 500, tol=1 / 256,
+                      name="hazard reproduced: time zero is the stale capture of mark 1"))
+    run.check(ValueAt("pmac.ect.method", t_mark2 - 1, RUNNING, name="hazard reproduced: running before mark 2"))
+
+    def time_zero_error() -> float:
+        starts = rig.entry.starts
+        return float(starts[0].time_zero_pos256 / 256 - belt.position(t_mark2)) if starts else float("nan")
+
+    def early() -> float:
+        starts = rig.entry.starts
+        return float(belt.position(starts[0].t_ns) - belt.position(t_mark2)) if starts else float("nan")
+
+    run.figure("time_zero_error_counts", time_zero_error, "counts")
+    run.figure("master_at_start_minus_mark2_counts", early, "counts")
+    run.figure("saturated_cycles", lambda: len(rig.entry.saturated_cycles))

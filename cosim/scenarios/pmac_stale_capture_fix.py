@@ -1,0 +1,53 @@
+"""Turbo PMAC stale-capture fix: a dummy read of the capture register after freezing; motion starts at the right mark.
+
+Same timing as ``pmac_stale_capture`` (entry left running, mark 1 captured and never read, freeze
+and arm between the same two servo interrupts), but the motion program reads the capture register
+X:$07800B (entry address + 3) right after freezing. That resets the trigger logic, so the armed
+entry waits for mark 2::
+
+    mark       __|‾|_______________________________|‾|____
+    flag       __|‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|_______________|‾‾‾
+    freeze/arm+read                 ^^
+    method     $A ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|$B ‾‾‾‾‾‾‾‾‾‾‾‾‾‾|$A      starts at mark 2
+
+Checks: time zero equals the master position at mark 2 within 1/256 count, the entry is still
+armed just before mark 2 and runs within one servo period after it.
+"""
+
+from __future__ import annotations
+
+from cosim.checks import Duration, EdgeRef, ValueAt
+from cosim.controllers.pmac import ARMED, RUNNING, LinearMove, rigs
+from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.scenario import Param, Run
+
+PARAMETERS = (
+    Param("t_freeze_ms", 12.0, "ms", (9.0, 20.0), "when the motion program freezes the entry"),
+    Param("arm_after_us", 100, "us", (1, 5000), "PLC arms this long after the freeze"),
+)
+UNTIL = "40 ms"
+
+
+def scenario(run: Run) -> None:
+    sim, p = run.sim, run.p
+    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
+    rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
+    clock = rig.pmac.clock
+    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(sim.ticks(p.t_freeze_ms, "ms"))) + 1_000
+    rigs.freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze,
+                         arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=True)
+    rig.pmac.start()
+
+    t_mark2 = belt.mark_times[1][0]
+    period = int(-(-clock.period_ns // 1))
+    run.check(ValueAt("pmac.ect.time_zero_pos", None, float(belt.position(t_mark2)), tol=1 / 256,
+                      name="time zero = master position at mark 2 (1/256 count)"))
+    run.check(ValueAt("pmac.ect.method", t_mark2 - 1, ARMED, name="still armed just before mark 2"))
+    run.check(Duration(EdgeRef("conveyor.mark", 1, which="last"), EdgeRef("pmac.ect.method", RUNNING), max=period,
+                       name="running within one servo period of mark 2"))
+
+    def time_zero_error() -> float:
+        starts = rig.entry.starts
+        return float(starts[0].time_zero_pos256 / 256 - belt.position(t_mark2)) if starts else float("nan")
+
+    run.figure("time_zero_error_counts", time_zero_error, "counts")
