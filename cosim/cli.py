@@ -67,6 +67,10 @@ def _parser() -> argparse.ArgumentParser:
     sweep.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument("--out", type=Path, default=None, help="results folder (default results/sweep-<scenario>)")
 
+    from cosim.pokeys_device.cli import add_parser as add_pokeys_device_parser
+
+    add_pokeys_device_parser(sub)
+
     main = sub.add_parser("main", help="the main job: build, run every bundled scenario, summary and report")
     main.add_argument("--out", type=Path, default=Path("results"), help="results folder (default results/)")
     return parser
@@ -165,6 +169,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return EXIT_PASS if verdicts.get("ERROR", 0) == 0 else EXIT_FAIL
 
 
+def cmd_pokeys_device(args: argparse.Namespace) -> int:
+    from cosim.pokeys_device.cli import cmd_pokeys_device as run
+
+    return run(args)
+
+
 def cmd_main(args: argparse.Namespace) -> int:
     from cosim.mainjob import main_job
 
@@ -172,7 +182,8 @@ def cmd_main(args: argparse.Namespace) -> int:
 
 
 COMMANDS = {"run": cmd_run, "list": cmd_list, "params": cmd_params, "build-fmus": cmd_build,
-            "check-fmus": cmd_check, "sweep": cmd_sweep, "main": cmd_main}
+            "check-fmus": cmd_check, "sweep": cmd_sweep,
+            "pokeys-device": cmd_pokeys_device, "main": cmd_main}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
