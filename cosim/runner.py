@@ -203,6 +203,8 @@ def _progress_bar(sim: Simulation, end: int) -> Any:
 
     def update(now: int) -> None:
         bar.n = round(sim.timebase.seconds(now) * 1e3, 3)
+        if bar.n > bar.total:  # a scenario that runs on past UNTIL until its job is done
+            bar.total = bar.n
         bar.refresh()
 
     sim.env.on_progress = update
