@@ -1,12 +1,15 @@
 """Real-time factor of the PoKeys pulse engine on a 60 s 3-axis job at up to 25 kHz, beside a naive model.
 
-The same job runs twice in one process: through :class:`PulseEngine` (one pulse-train segment per
-slot and axis) and through :class:`NaivePulseEngine` (one SimPy event per pulse). Both are fed by
-the host model over the USB link. Then every pulse of the segment run is checked (at most 25 per
-slot, spacing, direction set-up). Printed: wall time per part and the real-time factors
-(simulated time / wall time). Stepper FMUs are not coupled yet. Run::
+The same job runs in one process: through :class:`PulseEngine` (one pulse-train segment per slot
+and axis) alone, through it with three Stepper FMUs (NEMA 17 preset, FMI 3.0) coupled by
+:func:`~cosim.controllers.pokeys.plant.couple_stepper`, and through :class:`NaivePulseEngine` (one
+SimPy event per pulse). All are fed by the host model over the USB link. Then every pulse of the
+segment run is checked (at most 25 per slot, spacing, direction set-up) and the steppers'
+``commanded_steps`` are compared with the engine counters. Printed: wall time per part (engine,
+FMUs = the difference between the runs with and without them, checks) and the real-time factors
+(simulated time / wall time). Run::
 
-    .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive]
+    .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive] [--no-steppers] [--ideal-driver]
 """
 
 from __future__ import annotations
@@ -19,7 +22,10 @@ from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, u
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.naive import NaivePulseEngine
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.controllers.pokeys.plant import couple_stepper
 from cosim.kernel import Simulation
+from cosim.master import Plant
+from cosim.presets import load_preset
 
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
 
@@ -35,15 +41,30 @@ def job(seconds: int, config: EngineConfig) -> list[bytes]:
     return to_entries(counts)
 
 
-def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig) -> tuple[Simulation, float, int]:
+IDEAL_DRIVER = {"phase_inductance": 0.0, "max_step": 1e-4}  # ideal current source, 100 us solver steps at most
+
+
+def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig, *,
+             steppers: bool = False, ideal_driver: bool = False) -> tuple[Simulation, float, int]:
+    """Run the job; with ``steppers`` three Stepper FMUs (loaded before the clock starts) follow the axes."""
     sim = Simulation(seed=1)
     engine = kind(sim, config)
     HostApp(sim, engine, entries, link="usb", prefill_slots=100, period_ns=10_000_000)
+    plants = []
+    if steppers:
+        preset = {**load_preset("nema17_17hs16_2004s1"), **(IDEAL_DRIVER if ideal_driver else {})}
+        plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", parameters=preset) for a in AXES]
+        for i, plant in enumerate(plants):
+            couple_stepper(sim, engine, i, plant)
     until = (len(entries) + 200) * SLOT_NS
     started = time.perf_counter()
     sim.run(until=until)
     wall = time.perf_counter() - started
     assert engine.all_underruns == [], engine.all_underruns
+    for i, plant in enumerate(plants):
+        commanded = int(plant.read("commanded_steps"))
+        assert commanded == engine.positions[i].value == engine.steps[i].position, (commanded, i)
+    sim.close()
     return sim, wall, until
 
 
@@ -51,6 +72,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=int, default=60, help="job length [s] (default 60)")
     parser.add_argument("--no-naive", action="store_true", help="skip the naive per-pulse model")
+    parser.add_argument("--no-steppers", action="store_true", help="skip the run with three stepper FMUs")
+    parser.add_argument("--ideal-driver", action="store_true",
+                        help="stepper FMUs with an ideal current source and max_step 100 us (faster, no L/R dynamics)")
     args = parser.parse_args()
 
     config = EngineConfig(axes=uniform_axes(max_speed_hz=25_000, accel=500_000, decel=500_000))
@@ -75,9 +99,15 @@ def main() -> None:
     print(f"  planning (host planner, before the run)  {plan_s:8.3f} s")
     print(f"  engine + host simulation                 {engine_s:8.3f} s   RTF {simulated_s / engine_s:7.1f}x")
     print(f"  checks over every pulse ({len(results)} checks)      {checks_s:8.3f} s")
-    print("  stepper FMUs                             (not coupled yet)")
     total = engine_s + checks_s
     print(f"  engine + checks                          {total:8.3f} s   RTF {simulated_s / total:7.1f}x")
+    if not args.no_steppers:
+        _, coupled_s, _ = simulate(PulseEngine, entries, config, steppers=True, ideal_driver=args.ideal_driver)
+        fmus_s = coupled_s - engine_s
+        print(f"  engine + host + 3 stepper FMUs           {coupled_s:8.3f} s   RTF {simulated_s / coupled_s:7.1f}x")
+        print(f"    of which the FMUs and their coupling   {fmus_s:8.3f} s   (commanded_steps = counters: checked)")
+        full = coupled_s + checks_s
+        print(f"  engine + FMUs + checks (the issue's job) {full:8.3f} s   RTF {simulated_s / full:7.1f}x")
     if not args.no_naive:
         naive_sim, naive_s, _ = simulate(NaivePulseEngine, entries, config)
         naive_pulses = sum(naive_sim.trace.pulses(f"pokeys.{a}.step")[0].size for a in AXES)

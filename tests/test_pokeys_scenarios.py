@@ -35,6 +35,20 @@ def test_job_at_25_khz_uses_all_25_pulses_of_a_slot_and_passes() -> None:
     assert result.verdict == "PASS", result.table()
 
 
+@pytest.mark.fmu
+def test_job_drives_three_stepper_fmus_whose_commanded_steps_equal_the_counters() -> None:
+    result = run("pokeys_job", moves=1, distance=3_000)
+    assert result.verdict == "PASS", result.table()
+    by_name = {c["name"]: c for c in result.checks}
+    for axis, end in (("x", 3_000), ("y", -2_250), ("z", 1_500)):
+        assert by_name[f"{axis}: stepper commanded_steps = position counter = {end}"]["checked"] == 1
+    # at most one rate change per slot and axis, far fewer while the rate holds at cruise
+    assert 0 < figure(result, "step_rate_changes") < 3 * figure(result, "slots")
+    without = run("pokeys_job", moves=1, distance=3_000, steppers="false")
+    assert without.verdict == "PASS" and "fmu_steps" not in without.figures
+    assert not any("stepper" in c["name"] for c in without.checks)
+
+
 def test_stall_underrun_is_reported_with_start_and_length_and_prefill_avoids_it() -> None:
     stalled = run("pokeys_stall")
     assert stalled.verdict == "PASS", stalled.table()

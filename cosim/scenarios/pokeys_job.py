@@ -8,9 +8,13 @@ and axis::
     x.step       |.....|.....|.....| ...           at most 25 pulses per slot
     buffer_level  ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾\\__       kept at ``prefill`` slots, no underrun
 
+With ``steppers`` (default) each axis drives a Stepper FMU (NEMA 17 preset, FMI 3.0) through
+:func:`~cosim.controllers.pokeys.plant.couple_stepper`: one ``step_rate`` change per slot at most,
+none while the rate holds.
+
 Checks: at most 25 pulses per slot on every axis, pulses at least 40 us apart, the direction set
-up before every pulse, no underrun, and each position counter equal to the pulses emitted and to
-the planned end position.
+up before every pulse, no underrun, and each position counter equal to the pulses emitted, to
+the planned end position and (with ``steppers``) to the stepper's ``commanded_steps``.
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from cosim.checks import DirectionSetup, IntervalsAbove, MinPulseSpacing, Pulses
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.controllers.pokeys.plant import couple_stepper
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -28,8 +33,10 @@ PARAMETERS = (
     Param("moves", 3, "", (1, 100), "moves (out and back alternately)"),
     Param("link", "usb", "", ("usb", "ethernet"), "host link profile"),
     Param("prefill", 64, "slots", (1, 128), "slots queued before the start, and the level the host keeps"),
+    Param("steppers", True, "", None, "drive a Stepper FMU (NEMA 17 preset) on every axis"),
 )
 UNTIL = "2 s"
+PRESET = "nema17_17hs16_2004s1"
 
 
 def scenario(run: Run) -> None:
@@ -40,6 +47,8 @@ def scenario(run: Run) -> None:
     targets = [far if k % 2 == 0 else (0, 0, 0) for k in range(p.moves)]
     counts = plan([Move(t) for t in targets], config.axes)
     host = HostApp(run.sim, engine, to_entries(counts), link=p.link, prefill_slots=p.prefill)
+    plants = [run.plant("Stepper", name=f"stepper_{axis}", preset=PRESET) for axis in AXES] if p.steppers else []
+    couplings = [couple_stepper(run.sim, engine, a, plant) for a, plant in enumerate(plants)]
 
     end = targets[-1]
     for a, axis in enumerate(AXES):
@@ -50,8 +59,14 @@ def scenario(run: Run) -> None:
                                  name=f"{axis}: direction set up {config.dir_setup_ns} ns before each pulse"))
         run.check(ValueAt(step, None, end[a], name=f"{axis}: pulses emitted add up to {end[a]}"))
         run.check(ValueAt(f"pokeys.{axis}.position", None, end[a], name=f"{axis}: position counter = {end[a]}"))
+        if p.steppers:
+            run.check(ValueAt(couplings[a].commanded_signal, None, end[a],
+                              name=f"{axis}: stepper commanded_steps = position counter = {end[a]}"))
     run.check(IntervalsAbove("pokeys.underrun", 0, name="no buffer underrun"))
     run.figure("slots", len(counts))
     run.figure("pulses", sum(abs(c) for slot in counts for c in slot))
     run.figure("fill_commands", lambda: len(host.fills))
+    if p.steppers:
+        run.figure("fmu_steps", lambda: sum(plant.steps for plant in plants))
+        run.figure("step_rate_changes", lambda: sum(c.settings for c in couplings))
     run.figure("job_done_ms", lambda: (host.t_buffer_mode_ns or 0) / 1e6 + len(counts), "ms")

@@ -1,7 +1,8 @@
 """A stand-in for a driven axis: counts step pulses and drives switch inputs from the position.
 
-Until the stepper plants exist this is the simplest plant: it subscribes to a step pulse train
-(the same coupling a stepper FMU uses: one call per slot segment) and sets a switch signal at the
+The simplest plant, for tests without FMUs (:mod:`~cosim.controllers.pokeys.plant` couples the
+Stepper FMU): it subscribes to a step pulse train (one call per slot segment, as the FMU coupling
+does) and sets a switch signal at the
 exact pulse instant at which the axis position enters or leaves a region, with priority
 PLANT_EVENT. The engine sees the change at its next slot start.
 """

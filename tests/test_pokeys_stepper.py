@@ -1,0 +1,171 @@
+"""PoKeys engine coupled to Stepper FMUs: the FMUs count exactly the engine's pulses, slot by slot.
+
+    slot         |s                  |s+1                |s+2 (empty)
+    engine       |.  |  .  .  .  .   |.  |  .  .  .  .   |
+    step_rate    ____|‾‾‾‾ n/1ms ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|____    set at t0 = slot start + 5 us, once per change
+    FMU pulses       t0 + k*1ms/n    (engine: t0 + (k*1ms)//n, less than 1 ns earlier)
+    counters     position == pulses emitted == commanded_steps
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+import pytest
+
+from cosim.controllers.pokeys import AXES, SLOT_NS, AxisConfig, EngineConfig, EngineState, PulseEngine, encode_entry
+from cosim.controllers.pokeys.host import HostApp
+from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.controllers.pokeys.plant import couple_stepper, couple_switches
+from cosim.errors import ConfigurationError
+from cosim.kernel import Simulation
+from cosim.master import Plant
+from cosim.presets import load_preset
+from cosim.signals import Signal
+
+pytestmark = pytest.mark.fmu
+
+MS = 1_000_000
+PRESET = "nema17_17hs16_2004s1"
+PITCH_M = 0.008 / (200 * 16)  # carriage travel of one pulse: 8 mm lead, 200 steps x 16 microsteps
+
+
+def stepper(sim: Simulation, name: str, **parameters: float) -> Plant:
+    return Plant.load(sim, "Stepper", name=name, fmi_version=3,
+                      parameters={**load_preset(PRESET), "limit_neg_position": -1.0, **parameters})
+
+
+def test_three_axis_job_near_25_khz_counters_equal_pulses_and_commanded_steps(sim: Simulation) -> None:
+    config = EngineConfig(axes=tuple(AxisConfig(max_speed_hz=24_000, accel=400_000, decel=400_000)
+                                     for _ in AXES))
+    engine = PulseEngine(sim, config)
+    plants = [stepper(sim, f"stepper_{a}") for a in AXES]
+    couplings = [couple_stepper(sim, engine, i, plant) for i, plant in enumerate(plants)]
+    far = (3_000, -2_250, 1_500)
+    counts = plan([Move(far)], config.axes)
+    HostApp(sim, engine, to_entries(counts), link="usb", prefill_slots=64)
+    sim.run(until=300 * MS)
+
+    assert engine.state == EngineState.BUFFER and engine.all_underruns == []
+    for i, a in enumerate(AXES):
+        segments = sim.trace.segments(f"pokeys.{a}.step")
+        assert int(segments["count"].max()) == {"x": 24, "y": 18, "z": 12}[a] <= 25  # no slot above 25 pulses
+        emitted = sim.trace.pulses(f"pokeys.{a}.step")
+        pulses = int(np.where(emitted[1] == 1, 1, -1).sum())
+        commanded = int(plants[i].read("commanded_steps"))
+        assert engine.positions[i].value == pulses == commanded == far[i]
+        # the FMU's last pulse is the engine's, less than 1 ns later (exact t0 + k*1ms/n vs floored)
+        lag_ns = float(plants[i].read("last_pulse_time")) * 1e9 - int(emitted[0][-1])
+        assert -1e-3 < lag_ns < 1.0
+        # inputs set at most once per slot, and far less while the rate holds
+        assert couplings[i].settings <= len(segments["count"]) + 1
+        assert plants[i].steps < len(counts)
+    # the recorded commanded_steps end at the counter (what the scenario check compares)
+    t, v = sim.trace.edges("stepper_x.commanded_steps")
+    assert int(v[-1]) == 3_000 and int(t[-1]) == sim.trace.segments("pokeys.x.step")["t0"][-1] + SLOT_NS
+
+
+def test_constant_count_sets_the_rate_once_and_zero_after_the_last_slot(sim: Simulation) -> None:
+    engine = PulseEngine(sim)
+    plant = stepper(sim, "stepper_x")
+    coupling = couple_stepper(sim, engine, 0, plant)
+    engine.fill_buffer([encode_entry((7, 0, 0))] * 5 + [encode_entry((0, 0, 0)), encode_entry((-3, 0, 0))])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=10 * MS)
+    # 7 kHz from 5 us to 5.005 ms, 0 in slot 5, -3 kHz in slot 6, 0 after it: four input changes
+    t, v = sim.trace.edges("stepper_x.commanded_steps")
+    assert t.tolist() == [0, 5_000, 5 * MS + 5_000, 6 * MS + 5_000, 7 * MS + 5_000]
+    assert v.tolist() == [0, 0, 35, 35, 32]
+    assert coupling.settings == 4 and coupling.rate_hz == 0.0
+    assert int(plant.read("commanded_steps")) == engine.positions[0].value == 32
+
+
+class RecordingPlant:
+    """Test double: records ``(t, step_rate)`` and counts pulses the way the FMU does (rate held per slot)."""
+
+    name = "double"
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        self.sets: list[tuple[int, float]] = []
+
+    def set(self, values: Mapping[str, float]) -> None:
+        if "step_rate" in values:
+            self.sets.append((self.sim.now, values["step_rate"]))
+
+    def read(self, variable: str) -> object:
+        return 0
+
+    def watch(self, variable: str) -> Signal:
+        return Signal(self.sim, f"double.x.{variable}")
+
+
+def test_without_direction_setup_the_next_slot_continues_the_rate_at_the_same_instant(sim: Simulation) -> None:
+    engine = PulseEngine(sim, EngineConfig(dir_setup_ns=0))
+    plant = RecordingPlant(sim)
+    couple_stepper(sim, engine, 1, plant)
+    engine.fill_buffer([encode_entry((0, -25, 0))] * 3 + [encode_entry((0, 2, 0))])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=6 * MS)
+    assert plant.sets == [(0, 0.0), (0, -25_000.0), (3 * MS, 2_000.0), (4 * MS, 0.0)]
+
+
+def test_inverted_direction_turns_the_motor_the_other_way(sim: Simulation) -> None:
+    engine = PulseEngine(sim, EngineConfig(axes=(AxisConfig(invert_direction=True), AxisConfig(), AxisConfig())))
+    plant = stepper(sim, "stepper_x")
+    couple_stepper(sim, engine, 0, plant)
+    engine.fill_buffer([encode_entry((4, 0, 0)), encode_entry((-10, 0, 0))])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=3 * MS)
+    assert engine.positions[0].value == -6
+    assert int(plant.read("commanded_steps")) == 6
+
+
+def test_limit_trip_from_the_fmu_stops_pulses_at_the_next_slot_boundary(sim: Simulation) -> None:
+    """The carriage reaches limit+ inside slot s; the engine sees it at the start of s+1 and stops.
+
+        slot          | s-1     | s       | s+1
+        x.step        |.........|.........|              last pulse: the last one of slot s
+        x.limit_pos   ______________|‾‾‾‾‾‾‾‾‾‾‾‾         FMU event (exact, FMI 3.0 early return)
+        state         2 ..................|100
+    """
+    x = AxisConfig(max_speed_hz=20_000, accel=1_000_000, decel=1_000_000, limit_pos_enabled=True)
+    engine = PulseEngine(sim, EngineConfig(axes=(x, AxisConfig(), AxisConfig())))
+    plant = stepper(sim, "stepper_x", limit_pos_position=1_000 * PITCH_M)
+    couple_stepper(sim, engine, 0, plant)
+    couple_switches(plant, engine, 0, ("limit_pos",))
+    HostApp(sim, engine, to_entries(plan([Move((4_000, 0, 0))], engine.config.axes)), link="usb")
+    sim.run(until=200 * MS)
+
+    t_sw, v_sw = sim.trace.edges("pokeys.x.limit_pos")
+    t_trip = int(t_sw[v_sw == 1][0])
+    boundary = engine.t0_ns + -(-(t_trip - engine.t0_ns) // SLOT_NS) * SLOT_NS  # first slot start >= trip
+    segments = sim.trace.segments("pokeys.x.step")
+    last = int(np.flatnonzero(segments["t0"] < boundary)[-1])
+    t0, n = int(segments["t0"][last]), int(segments["count"][last])
+    pulses = sim.trace.pulses("pokeys.x.step")[0]
+    assert int(pulses[-1]) == t0 + ((n - 1) * SLOT_NS) // n < boundary  # the exact last pulse
+    t_state, v_state = sim.trace.edges("pokeys.state")
+    assert int(t_state[v_state == 100][0]) == boundary
+    assert engine.state == EngineState.STOP_LIMIT
+    assert 950 < engine.positions[0].value < 1_100  # the rotor lags the command a little
+    assert int(plant.read("commanded_steps")) == engine.positions[0].value == pulses.size
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"axis": 3}, "axis"),
+    ({"axis": -1}, "axis"),
+])
+def test_bad_axis_is_refused(sim: Simulation, kwargs: dict[str, int], message: str) -> None:
+    engine = PulseEngine(sim)
+    plant = stepper(sim, "stepper_x")
+    with pytest.raises(ConfigurationError, match=message):
+        couple_stepper(sim, engine, kwargs["axis"], plant)
+    with pytest.raises(ConfigurationError, match=message):
+        couple_switches(plant, engine, kwargs["axis"])
+
+
+def test_unknown_switch_output_is_refused(sim: Simulation) -> None:
+    with pytest.raises(ConfigurationError, match=r"switch output.*'torque'.*limit_pos, limit_neg, home"):
+        couple_switches(stepper(sim, "stepper_x"), PulseEngine(sim), 0, ("torque",))
