@@ -123,7 +123,7 @@ def stage(model: str, fmi_version: int, folder: Path) -> fmudesc.ModelSpec:
     (folder / "documentation").mkdir()
     for name in (*spec.sources, "model.h", "model.toml"):
         shutil.copy2(spec.folder / name, sources / name)
-    for name in (*fmudesc.COMMON_SOURCES, f"fmi{fmi_version}_cs.c"):
+    for name in (*fmudesc.COMMON_SOURCES, *spec.shared, f"fmi{fmi_version}_cs.c"):
         shutil.copy2(SOURCE_DIR / "common" / name, sources / name)
     (sources / "model_vars.h").write_text(fmudesc.model_vars_h(spec))
     (sources / "model_vars.c").write_text(fmudesc.model_vars_c(spec))

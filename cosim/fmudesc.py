@@ -87,6 +87,7 @@ class ModelSpec:
     version: str
     sources: tuple[str, ...]
     folder: Path
+    shared: tuple[str, ...] = ()
     event_indicators: int = 0
     has_events: bool = False
     default_step: float = 1e-3
@@ -125,6 +126,7 @@ def load_spec(folder: Path) -> ModelSpec:
     return ModelSpec(
         name=model["name"], description=model["description"], token=model["instantiation_token"],
         version=model["version"], sources=tuple(model["sources"]), folder=folder,
+        shared=tuple(model.get("shared", ())),
         event_indicators=int(model.get("event_indicators", 0)), has_events=bool(model.get("events", False)),
         default_step=float(model.get("default_step", 1e-3)), stop_time=float(model.get("stop_time", 1.0)),
         variables=tuple(variables),
@@ -362,4 +364,5 @@ COMMON_SOURCES = ("cosim_fmu.h", "cosim_fmu.c")
 
 def sources_for(spec: ModelSpec, fmi_version: int) -> list[str]:
     """The C files compiled for one FMI version (headers are in the same folder)."""
-    return [*spec.sources, "model_vars.c", "cosim_fmu.c", f"fmi{fmi_version}_cs.c"]
+    shared = [name for name in spec.shared if name.endswith(".c")]
+    return [*spec.sources, *shared, "model_vars.c", "cosim_fmu.c", f"fmi{fmi_version}_cs.c"]

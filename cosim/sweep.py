@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from cosim.errors import ConfigurationError
-from cosim.scenario import Param, load
+from cosim.scenario import Param, ScenarioFile, load
 
 
 @dataclass(frozen=True)
@@ -95,13 +95,13 @@ def _range(declared: Mapping[str, Param], name: str, bounds: tuple[Any, Any] | N
     return low, high
 
 
-def run_one(scenario: str, spec: RunSpec) -> dict[str, Any]:
+def run_one(scenario: str | ScenarioFile, spec: RunSpec) -> dict[str, Any]:
     """Run one sweep point and flatten its result into a table row (no files written)."""
     from cosim.runner import run_scenario
 
     row: dict[str, Any] = {"index": spec.index, "seed": spec.seed}
     try:
-        script = load(scenario)
+        script = load(scenario) if isinstance(scenario, str) else scenario
         row.update({f"p.{k}": v for k, v in script.resolve(spec.overrides).items()})
         result = run_scenario(script, overrides=spec.overrides, seed=spec.seed)
     except Exception as exc:  # a broken run is a row, not the end of the sweep
@@ -121,15 +121,18 @@ def run_one(scenario: str, spec: RunSpec) -> dict[str, Any]:
 
 
 def run_chunk(scenario: str, specs: list[RunSpec]) -> list[dict[str, Any]]:
-    """Run several sweep points one after the other (one Dask task)."""
-    return [run_one(scenario, spec) for spec in specs]
+    """Run several sweep points one after the other (one Dask task; the script is loaded once)."""
+    try:
+        script: str | ScenarioFile = load(scenario)
+    except Exception:  # each run reports the error in its own row
+        script = scenario
+    return [run_one(script, spec) for spec in specs]
 
 
 def _results(scenario: str, runs: list[RunSpec], workers: int, scheduler: str | None,
              timing: dict[str, float]) -> Iterator[dict[str, Any]]:
     if workers == 0 and scheduler is None:
-        for spec in runs:
-            yield run_one(scenario, spec)
+        yield from run_chunk(scenario, runs)
         return
     from dask.distributed import Client, LocalCluster, as_completed
 

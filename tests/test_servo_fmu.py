@@ -81,8 +81,12 @@ def test_fmu_holds_its_sources(servo_fmu: Path) -> None:
 
 
 def test_encoder_source_is_the_same_in_both_plants() -> None:
-    servo = (SOURCE_DIR / "Servo" / "encoder.c").read_text()
-    assert servo == (SOURCE_DIR / "Conveyor" / "encoder.c").read_text()
+    def packed(model: str) -> bytes:
+        with zipfile.ZipFile(ensure_fmu(model, 3)) as zf:
+            return zf.read("sources/encoder.c")
+
+    servo = packed("Servo")
+    assert servo == packed("Conveyor") == (SOURCE_DIR / "common" / "encoder.c").read_bytes()
 
 
 def test_simulates_standalone_in_fmpy(servo_fmu: Path) -> None:

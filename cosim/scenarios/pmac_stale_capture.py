@@ -20,8 +20,7 @@ checks for the correct start.
 from __future__ import annotations
 
 from cosim.checks import ValueAt
-from cosim.controllers.pmac import RUNNING, LinearMove, rigs
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac import RUNNING, rigs
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -34,13 +33,8 @@ UNTIL = "40 ms"
 
 def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
-    rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
-    clock = rig.pmac.clock
-    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(sim.ticks(p.t_freeze_ms, "ms"))) + 1_000
-    rigs.freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze,
-                         arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=p.dummy_read)
-    rig.pmac.start()
+    belt, rig = rigs.stale_capture(sim, t_freeze_ns=sim.ticks(p.t_freeze_ms, "ms"),
+                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=p.dummy_read)
 
     t_mark2 = belt.mark_times[1][0]
     run.check(ValueAt("pmac.ect.time_zero_pos", None, 500, tol=1 / 256,

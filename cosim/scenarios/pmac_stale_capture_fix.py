@@ -17,8 +17,7 @@ armed just before mark 2 and runs within one servo period after it.
 from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, ValueAt
-from cosim.controllers.pmac import ARMED, RUNNING, LinearMove, rigs
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac import ARMED, RUNNING, rigs
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -30,16 +29,11 @@ UNTIL = "40 ms"
 
 def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
-    rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
-    clock = rig.pmac.clock
-    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(sim.ticks(p.t_freeze_ms, "ms"))) + 1_000
-    rigs.freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze,
-                         arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=True)
-    rig.pmac.start()
+    belt, rig = rigs.stale_capture(sim, t_freeze_ns=sim.ticks(p.t_freeze_ms, "ms"),
+                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=True)
 
     t_mark2 = belt.mark_times[1][0]
-    period = int(-(-clock.period_ns // 1))
+    period = int(-(-rig.pmac.clock.period_ns // 1))
     run.check(ValueAt("pmac.ect.time_zero_pos", None, float(belt.position(t_mark2)), tol=1 / 256,
                       name="time zero = master position at mark 2 (1/256 count)"))
     run.check(ValueAt("pmac.ect.method", t_mark2 - 1, ARMED, name="still armed just before mark 2"))

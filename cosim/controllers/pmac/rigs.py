@@ -17,13 +17,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from cosim.controllers.pmac.coord import CoordinateSystem
-from cosim.controllers.pmac.ect import ARMED, FROZEN, TimeBaseEntry, TriggeredTimeBaseEntry
+from cosim.controllers.pmac.ect import ARMED, FROZEN, RUNNING, TimeBaseEntry, TriggeredTimeBaseEntry
 from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSource
 from cosim.controllers.pmac.machine import Pmac
-from cosim.controllers.pmac.motion import Item
+from cosim.controllers.pmac.motion import Item, LinearMove
 from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.servo import MotorModel, PidDesign, PidLoop, design_pid
-from cosim.controllers.pmac.testbench import DcMotorStandIn
+from cosim.controllers.pmac.testbench import AnalyticConveyor, DcMotorStandIn
 from cosim.controllers.pmac.units import I10_DEFAULT, IX94_MAX
 from cosim.signals import Signal
 from cosim.timebase import Priority
@@ -127,3 +127,22 @@ def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: 
             rig.pmac.set_ivar(8000, armed)
 
     sim.process(motion_program_and_plc())
+
+
+def stale_capture(sim: Simulation, *, t_freeze_ns: int, arm_after_ns: int,
+                  dummy_read: bool) -> tuple[AnalyticConveyor, Rig[TriggeredTimeBaseEntry]]:
+    """The stale-capture set-up of the manual's warning, started.
+
+    A 64 counts/ms belt with marks at 500 and 1500 counts; the triggered entry is left running,
+    so mark 1's capture is never read. The motion program freezes the entry 1 us after the first
+    servo interrupt at or after ``t_freeze_ns`` and the PLC arms it ``arm_after_ns`` later
+    (:func:`freeze_then_arm`); with ``dummy_read`` the program reads the capture register.
+    """
+    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
+    rig = triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
+    clock = rig.pmac.clock
+    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(t_freeze_ns)) + 1_000
+    freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze, arm_after_ns=arm_after_ns,
+                    dummy_read=dummy_read)
+    rig.pmac.start()
+    return belt, rig

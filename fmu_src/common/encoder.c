@@ -1,8 +1,7 @@
 /* Quadrature encoder with exact edge instants, and the bracketing root finder the plants use.
  *
- * Shared by the Servo and Conveyor plants. Each FMU's sources/ must be complete on its own, so
- * both plant folders hold an identical copy of this file (a test keeps the copies identical);
- * the declarations are at the top of each plant's model.h.
+ * Shared by the Servo and Conveyor plants (`shared` in their model.toml): the build copies it and
+ * encoder.h into each FMU's sources/, so every FMU stays complete on its own.
  *
  * The count is floor(position) with the position in counts: moving up, the count becomes n when
  * the position reaches n; moving down, it becomes n - 1 when the position drops below n. The
