@@ -14,7 +14,7 @@ import difflib
 import shutil
 import tempfile
 from collections import deque
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -289,6 +289,40 @@ class Fmu:
             return list(values)
 
         return read
+
+    def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
+        """A function setting ``names`` (all Float64/Real inputs) to its argument's values in one FMI call.
+
+        The hot path of couplings that change an input every slot. A value the FMU refuses raises
+        :class:`FmuError` with the FMU's own message (which names the variable and its range).
+        """
+        variables = [self.variable(name) for name in names]
+        if not variables or any(v.type not in ("Real", "Float64") for v in variables):
+            raise ConfigurationError(f"{self.instance_name}: writer() takes Float64 variables only; got "
+                                     + ", ".join(f"{v.name} ({v.type})" for v in variables))
+        put = self._raw("fmi2SetReal" if self.fmi_version == 2 else "fmi3SetFloat64")
+        if put is None:
+            def write_each(values: Sequence[float]) -> None:
+                for v, x in zip(variables, values, strict=True):
+                    self.set(v.name, float(x))
+
+            return write_each
+        n = len(variables)
+        vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
+        buffer = (ctypes.c_double * n)()
+        tail = () if self.fmi_version == 2 else (n,)
+        component = self._fmu.component
+
+        def write(values: Sequence[float]) -> None:
+            for i, x in enumerate(values):
+                buffer[i] = x
+            status = put(component, vrs, n, buffer, *tail)
+            if status > 1:
+                raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: setting "
+                               + ", ".join(f"{name} = {x!r}" for name, x in zip(names, values, strict=True))
+                               + f" failed with status {_STATUS.get(status, status)}", self.log)
+
+        return write
 
     def advance_to(self, t: int) -> int:
         """Advance the FMU to tick ``t``; returns the tick it reached.

@@ -109,6 +109,21 @@ class Plant:
         for variable, value in values.items():
             self.fmu.set(variable, value)
 
+    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
+        """A function that sets the Float64 inputs ``variables`` now (advancing first) in one FMI call.
+
+        Same effect as :meth:`set` with a mapping, for couplings that change an input at every
+        slot: names are resolved and the FMI arguments prepared once.
+        """
+        write = self.fmu.writer(list(variables))
+        advance = self.advance
+
+        def set_now(values: Sequence[float]) -> None:
+            advance()
+            write(values)
+
+        return set_now
+
     # -- outputs ----------------------------------------------------------------------------
     def read(self, variable: str) -> Value:
         """Value of ``variable`` now (advances the FMU to now first)."""

@@ -9,6 +9,7 @@ Gate pattern used below (enable on throughout)::
 from __future__ import annotations
 
 from fractions import Fraction
+from functools import partial
 from pathlib import Path
 
 import pytest
@@ -103,3 +104,34 @@ def test_fmu_error_mid_run_raises_with_its_message_and_keeps_the_trace(tmp_path:
     trace = Trace.load(tmp_path / "out")
     t, v = trace.edges("ctl.laser.pwm_period")
     assert t.tolist() == [0, 1 * MS, 2 * MS] and v.tolist() == [1000, 500, -3]
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_setter_advances_then_sets_in_one_call_like_set(fmi_version: int) -> None:
+    """A prepared setter gives the same run as set(): 7 kHz from 1 ms, 3 kHz from 2 ms, read at 3 ms."""
+    def run(prepared: bool) -> tuple[int, float, int]:
+        with Simulation() as sim:
+            plant = Plant.load(sim, "Stepper", name="stepper", fmi_version=fmi_version)
+            set_rate = plant.setter(["step_rate"])
+            for t_ms, rate_hz in ((1, 7_000.0), (2, 3_000.0)):
+                if prepared:
+                    sim.call_at(t_ms * MS, 40, partial(set_rate, [rate_hz]))
+                else:
+                    sim.call_at(t_ms * MS, 40, partial(plant.set, {"step_rate": rate_hz}))
+            sim.run(until=3 * MS)
+            return int(plant.read("commanded_steps")), float(plant.read("angle")), plant.steps
+
+    results = [run(False), run(True)]
+    assert results[0] == results[1]
+    assert results[0][0] == 7 + 3 and results[0][2] == 3  # two sets and the final read: three doSteps
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_setter_refused_value_names_variable_value_and_range(fmi_version: int) -> None:
+    with Simulation() as sim:
+        plant = Plant.load(sim, "Stepper", name="stepper", fmi_version=fmi_version)
+        with pytest.raises(FmuError, match=r"setting step_rate = 20000000.0 failed") as info:
+            plant.setter(["step_rate"])([2e7])
+        assert "input step_rate = 20000000 Hz is not allowed (allowed: -10000000..10000000 Hz)" in str(info.value)
+        with pytest.raises(ConfigurationError, match=r"Float64 variables only; got enable \(Boolean\)"):
+            plant.setter(["enable"])
