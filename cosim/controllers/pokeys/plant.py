@@ -13,7 +13,7 @@ instant plus ``(k * 1e6 mod count) / count`` ns: **less than 1 ns later**, never
     step_rate     ____|‾‾ 5 kHz ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|____   set at t0 of s, 0 at the end of s+1
                       ^ t0 = slot start + dir_setup_ns         (s+1 has the same rate: not set again)
 
-The inputs are set at most once per slot (one FMU step each, :meth:`~cosim.master.Plant.set`),
+The inputs are set at most once per slot (one FMU step each, :meth:`~cosim.master.Plant.setter`),
 and not at all while the count and direction stay the same from one slot to the next (the FMU
 continues its train from the same anchor, so the pulses are the same). ``step_rate`` returns to 0
 at the end of the last segment of a run of slots.
@@ -29,7 +29,7 @@ engine's limit and home inputs; the engine sees a change at its next slot start.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Protocol
@@ -51,6 +51,9 @@ class StepperPlant(Protocol):
 
     def set(self, values: Mapping[str, float]) -> None:
         """Set inputs now (advancing the plant to now first)."""
+
+    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
+        """A function setting these inputs now (advancing first), prepared once for the hot path."""
 
     def read(self, variable: str) -> object:
         """Value of an output now."""
@@ -102,7 +105,8 @@ class StepperCoupling:
     sign : int
         +1, or -1 when the axis' direction output is inverted.
     commanded_signal : str
-        Trace name of the plant's ``commanded_steps`` as recorded at every input change.
+        Trace name of the plant's ``commanded_steps``, recorded at the coupling and whenever the
+        axis stops (rate back to 0), where it must equal the engine's position counter.
     rate_hz : float
         The ``step_rate`` the plant has now [pulses/s].
     settings : int
@@ -115,6 +119,7 @@ class StepperCoupling:
     sign: int
     commanded_signal: str
     wakeups: _Wakeups = field(repr=False)
+    set_rate: Callable[[Sequence[float]], None] = field(repr=False)
     rate_hz: float = 0.0
     settings: int = 0
     _announced: dict[int, tuple[float, int]] = field(default_factory=dict, repr=False)  # t0 -> (rate, t_end)
@@ -140,10 +145,11 @@ class StepperCoupling:
     def _apply(self, rate_hz: float) -> None:
         if rate_hz == self.rate_hz:
             return  # same rate from the same anchor: the FMU continues the train by itself
-        self.plant.set({"step_rate": rate_hz})
+        self.set_rate((rate_hz,))
         self.rate_hz = rate_hz
         self.settings += 1
-        self.sim.trace.record(self.commanded_signal, self.sim.now, _as_int(self.plant.read("commanded_steps")))
+        if rate_hz == 0.0:
+            self.sim.trace.record(self.commanded_signal, self.sim.now, _as_int(self.plant.read("commanded_steps")))
 
 
 def couple_stepper(sim: Simulation, engine: PulseEngine, axis: int, plant: StepperPlant) -> StepperCoupling:
@@ -162,8 +168,8 @@ def couple_stepper(sim: Simulation, engine: PulseEngine, axis: int, plant: Stepp
     Returns
     -------
     StepperCoupling
-        Also records ``<plant>.commanded_steps`` [steps] at every input change, so a check can
-        compare it with ``pokeys.<axis>.position`` at the end of a job.
+        Also records ``<plant>.commanded_steps`` [steps] now and whenever the axis stops (rate
+        back to 0), so a check can compare it with ``pokeys.<axis>.position`` at the end of a job.
 
     Examples
     --------
@@ -182,7 +188,7 @@ def couple_stepper(sim: Simulation, engine: PulseEngine, axis: int, plant: Stepp
     wakeups = _WAKEUPS.get(engine)
     if wakeups is None:
         wakeups = _WAKEUPS[engine] = _Wakeups(sim)
-    coupling = StepperCoupling(sim, plant, axis, sign, name, wakeups)
+    coupling = StepperCoupling(sim, plant, axis, sign, name, wakeups, plant.setter(("step_rate",)))
     wakeups.couplings.append(coupling)
     engine.steps[axis].subscribe(coupling.on_segment)
     return coupling
