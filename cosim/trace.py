@@ -92,6 +92,7 @@ class Trace:
         self.info: dict[str, SignalInfo] = {}
         self._values: dict[str, _Channel] = {}
         self._pulses: dict[str, _PulseChannel] = {}
+        self._pulse_cache: dict[str, tuple[tuple[int, int], npt.NDArray[np.int64], npt.NDArray[np.int8]]] = {}
         self.end_t = 0
         self.meta: dict[str, object] = {}
 
@@ -170,16 +171,28 @@ class Trace:
         }
 
     def pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
-        """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order."""
+        """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order.
+
+        The arrays are read-only and kept until the train records more pulses, so several checks
+        of one train materialise it once.
+        """
         seg = self.segments(name)
         ch = self._pulses[name]
+        version = (len(ch.t0), len(ch.single_t))
+        cached = self._pulse_cache.get(name)
+        if cached is not None and cached[0] == version:
+            return cached[1], cached[2]
         t = materialize_pulses(seg["t0"], seg["duration"], seg["count"])
         d = np.repeat(seg["dir"].astype(np.int8), seg["count"])
         if len(ch.single_t):
             t = np.concatenate([t, np.frombuffer(ch.single_t, dtype=np.int64)])
             d = np.concatenate([d, np.frombuffer(ch.single_dir, dtype=np.int8)])
         order = np.argsort(t, kind="stable")
-        return t[order], d[order]
+        t, d = t[order], d[order]
+        t.setflags(write=False)
+        d.setflags(write=False)
+        self._pulse_cache[name] = (version, t, d)
+        return t, d
 
     # -- export -----------------------------------------------------------------------------
     def write(self, out: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:
