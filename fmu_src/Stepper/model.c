@@ -37,6 +37,8 @@ typedef struct {
     double ia_cmd, ib_cmd;
     int ideal; /* currents equal the commanded ones */
     double inductance, resistance, voltage, tau;
+    double h_fixed;        /* [s] the sub-step bound that does not depend on speed (see step_bound) */
+    double electrical_per_step; /* [rad] electrical angle of one microstep */
 } Dynamics;
 
 static int rotor_teeth(const ModelInstance *m) { return m->v.steps_per_rev / 4; }
@@ -63,7 +65,9 @@ static void commanded_currents(const ModelInstance *m, double *ia, double *ib) {
     *ib = amplitude * sin(angle);
 }
 
+/* Everything of Dynamics but the commanded currents: fixed over a whole doStep. */
 static void dynamics(const ModelInstance *m, Dynamics *d) {
+    double stiffness;
     d->nr = (double)rotor_teeth(m);
     d->kt = m->v.torque_constant;
     d->td = m->v.detent_torque;
@@ -77,13 +81,28 @@ static void dynamics(const ModelInstance *m, Dynamics *d) {
     d->resistance = m->v.phase_resistance;
     d->voltage = m->v.supply_voltage;
     d->tau = m->v.current_tau;
+    /* max_step, 1/50 of the small-signal natural period, 1/4 of the current loop's time constant */
+    d->h_fixed = m->v.max_step;
+    stiffness = d->nr * (d->kt * m->v.current + 4.0 * d->td);
+    if (stiffness > 0.0) {
+        d->h_fixed = fmin(d->h_fixed, TWO_PI / sqrt(stiffness / d->inertia) / 50.0);
+    }
+    if (!d->ideal) {
+        d->h_fixed = fmin(d->h_fixed, d->tau / 4.0);
+    }
+    d->electrical_per_step = TWO_PI / (4.0 * (double)m->v.microsteps);
 }
 
 static double clamp(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
+/* Motor torque from s = sin(Nr theta), c = cos(Nr theta); sin(4 Nr theta) = 4 s c (c^2 - s^2). */
+static double torque_sc(const Dynamics *d, const MotorState *x, double s, double c) {
+    return -d->kt * x->ia * s + d->kt * x->ib * c - d->td * 4.0 * s * c * (c * c - s * s);
+}
+
 static double motor_torque(const Dynamics *d, const MotorState *x) {
     const double e = d->nr * x->theta;
-    return -d->kt * x->ia * sin(e) + d->kt * x->ib * cos(e) - d->td * sin(4.0 * e);
+    return torque_sc(d, x, sin(e), cos(e));
 }
 
 /* Torque on the shaft except Coulomb friction. */
@@ -105,16 +124,17 @@ static double friction_torque(const Dynamics *d, double omega, double drive) {
     return clamp(drive, -d->friction, d->friction);
 }
 
+/* One sine and one cosine per evaluation (the compiler merges them), shared by torque and EMF. */
 static void derivatives(const Dynamics *d, const MotorState *x, MotorState *dx) {
-    const double drive = drive_torque(d, x);
+    const double e = d->nr * x->theta, s = sin(e), c = cos(e);
+    const double drive = torque_sc(d, x, s, c) - d->damping * x->omega - d->load;
     dx->theta = x->omega;
     dx->omega = (drive - friction_torque(d, x->omega, drive)) / d->inertia;
     if (d->ideal) {
         dx->ia = 0.0;
         dx->ib = 0.0;
     } else {
-        const double e = d->nr * x->theta;
-        const double emf_a = -d->kt * x->omega * sin(e), emf_b = d->kt * x->omega * cos(e);
+        const double emf_a = -d->kt * x->omega * s, emf_b = d->kt * x->omega * c;
         const double va = clamp(d->resistance * x->ia + emf_a + d->inductance * (d->ia_cmd - x->ia) / d->tau,
                                 -d->voltage, d->voltage);
         const double vb = clamp(d->resistance * x->ib + emf_b + d->inductance * (d->ib_cmd - x->ib) / d->tau,
@@ -163,23 +183,11 @@ static void rk4(const Dynamics *d, const MotorState *x0, double h, MotorState *x
 }
 
 /* Largest sub-step [s]: max_step, 1/50 of the small-signal natural period, 1/4 of the current
- * loop's time constant, and 0.25 rad of electrical angle at the faster of the rotor's speed and
- * the commanded speed. */
+ * loop's time constant (Dynamics.h_fixed), and 0.25 rad of electrical angle at the faster of the
+ * rotor's speed and the commanded speed. */
 static double step_bound(const ModelInstance *m, const Dynamics *d, double omega) {
-    double h = m->v.max_step;
-    const double stiffness = d->nr * (d->kt * m->v.current + 4.0 * d->td);
-    const double electrical_speed = fmax(d->nr * fabs(omega),
-                                         fabs(m->s.rate) * TWO_PI / (4.0 * (double)m->v.microsteps));
-    if (stiffness > 0.0) {
-        h = fmin(h, TWO_PI / sqrt(stiffness / d->inertia) / 50.0);
-    }
-    if (!d->ideal) {
-        h = fmin(h, d->tau / 4.0);
-    }
-    if (electrical_speed > 0.0) {
-        h = fmin(h, 0.25 / electrical_speed);
-    }
-    return h;
+    const double electrical_speed = fmax(d->nr * fabs(omega), fabs(m->s.rate) * d->electrical_per_step);
+    return electrical_speed > 0.0 ? fmin(d->h_fixed, 0.25 / electrical_speed) : d->h_fixed;
 }
 
 static double carriage_position(const ModelInstance *m, double theta) {
@@ -390,6 +398,7 @@ void model_outputs(ModelInstance *m) {
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
     ModelState *s = &m->s;
     double t = m->time;
+    Dynamics d;
     *event = 0;
     *t_reached = t_end;
     if (!(t_end > t)) {
@@ -399,10 +408,10 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
         return ST_ERROR;
     }
     latch_pulse_train(m, t);
+    dynamics(m, &d);
     for (;;) {
         const int direction = s->rate > 0.0 ? 1 : -1;
         double next = t_end, t_stop = t_end;
-        Dynamics d;
         /* the pulses due now: within PULSE_EPS of t, and not at the step's end */
         while (s->rate != 0.0) {
             const double tp = pulse_time(s, s->next_pulse);
@@ -418,7 +427,7 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
             }
             s->next_pulse++;
         }
-        dynamics(m, &d);
+        commanded_currents(m, &d.ia_cmd, &d.ib_cmd);
         if (d.ideal) {
             s->x.ia = d.ia_cmd;
             s->x.ib = d.ib_cmd;
