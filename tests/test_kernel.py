@@ -85,3 +85,36 @@ def test_run_writes_trace_even_when_a_process_fails(sim: Simulation, tmp_path: o
     back = Trace.load(out)
     assert back.edges("test.gate")[0].tolist() == [0, 100]
     assert back.end_t == 200
+
+
+def test_skip_to_moves_the_clock_only_when_nothing_is_due_before(sim: Simulation, log: list[object]) -> None:
+    """A loop at 0, 100, 200, ... skips its events until the one queued at 250 is next.
+
+    t:      0    100   200  250  300   400
+    loop    L    L*    L*        L     L*      (* = run by skip_to, no kernel event)
+    other                   O
+    """
+    skipped: list[int] = []
+
+    def loop() -> object:
+        k = 0
+        while True:
+            yield sim.at(k * 100, Priority.SLOT)
+            log.append(("loop", sim.now))
+            k += 1
+            while sim.skip_to(k * 100):
+                log.append(("loop", sim.now))
+                skipped.append(sim.now)
+                k += 1
+
+    sim.call_at(250, Priority.HOST, lambda: log.append(("other", sim.now)))
+    sim.process(loop())  # type: ignore[arg-type]
+    sim.run(until=450)
+    assert log == [("loop", 0), ("loop", 100), ("loop", 200), ("other", 250), ("loop", 300), ("loop", 400)]
+    assert skipped == [100, 200, 400]  # 300 came from its event (250 was queued when 200 ran); until 450 stops 500
+    assert not sim.skip_to(399)  # never back
+
+
+def test_skip_to_refuses_while_a_look_ahead_is_registered(sim: Simulation) -> None:
+    sim.add_look_ahead(lambda t_next: None)
+    assert not sim.skip_to(10) and sim.now == 0

@@ -35,3 +35,33 @@ def test_naive_model_gives_the_same_pulses_one_event_each() -> None:
     assert fast.status() == naive.status()
     assert naive_sim.trace.segments("pokeys.x.step")["count"].size == 0  # really one pulse at a time
     assert naive_sim.trace.pulses("pokeys.x.step")[0].size == 1000
+
+
+def test_slots_run_without_kernel_events_give_the_same_trace_as_one_event_per_slot() -> None:
+    """The engine skips slot events while nothing else is due; a 0.3 ms ticker forbids every skip."""
+    traces = []
+    for ticker in (False, True):
+        sim = Simulation(seed=1)
+        config = EngineConfig(axes=uniform_axes(accel=2_000_000, decel=2_000_000))
+        engine = PulseEngine(sim, config)
+        engine.fill_buffer(to_entries(plan([Move((500, -300, 13)), Move((0, 0, 0))], config.axes)))
+        engine.set_state(EngineState.BUFFER)
+        if ticker:
+            def tick(sim: Simulation = sim) -> object:
+                k = 0
+                while True:
+                    yield sim.at(k * 300_000 + 1)
+                    k += 1
+            sim.process(tick())  # type: ignore[arg-type]
+        steps_before = sim.env._steps
+        sim.run(until=130 * MS)
+        traces.append((sim, sim.env._steps - steps_before))
+    (plain, plain_steps), (ticked, ticked_steps) = traces
+    for name in plain.trace.names():
+        if plain.trace.info[name].kind == "pulse":
+            assert np.array_equal(plain.trace.pulses(name)[0], ticked.trace.pulses(name)[0]), name
+        else:
+            for a, b in zip(plain.trace.edges(name), ticked.trace.edges(name), strict=True):
+                assert np.array_equal(a, b), name
+    assert plain_steps <= 3  # the first slot's event and the run's end: 129 slots skipped
+    assert ticked_steps >= 130 + 434  # every slot its own event, beside the ticker's 434

@@ -266,14 +266,20 @@ class PulseEngine:
 
     # -- the slot process ---------------------------------------------------------------------
     def pulse_slot(self) -> Generator[Any, Any, None]:
-        """SimPy process: one pass of :meth:`run_slot` at every slot start."""
-        env, t0 = self.sim.env, self.t0_ns
+        """SimPy process: one pass of :meth:`run_slot` at every slot start.
+
+        Slots in a row with nothing else due in between run without a kernel event each
+        (:meth:`~cosim.kernel.Simulation.skip_to`): same instants, same trace.
+        """
+        sim, env, t0 = self.sim, self.sim.env, self.t0_ns
         k = 0
         while True:
-            t = t0 + k * SLOT_NS
-            yield At(env, t, Priority.SLOT)
-            self.run_slot(t)
+            yield At(env, t0 + k * SLOT_NS, Priority.SLOT)
+            self.run_slot(t0 + k * SLOT_NS)
             k += 1
+            while sim.skip_to(t0 + k * SLOT_NS):
+                self.run_slot(t0 + k * SLOT_NS)
+                k += 1
 
     def run_slot(self, t: int) -> None:
         """Everything the engine does at the slot start ``t`` [ns]."""
