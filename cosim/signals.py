@@ -113,6 +113,7 @@ class PulseTrain:
         self.position = 0
         self._listeners: list[SegmentListener] = []
         sim.trace.declare(name, "pulse", description=description, pulse_width=pulse_width)
+        self._record_segment = sim.trace.segment_recorder(name)
 
     def subscribe(self, listener: SegmentListener) -> None:
         """Call ``listener(train, t0, duration, count, direction)`` for every segment."""
@@ -128,7 +129,7 @@ class PulseTrain:
                 f"{self.name}: segment count={count} (>= 0), duration={duration} (> 0 ticks), "
                 f"direction={direction} (0 or 1) is not valid"
             )
-        self.sim.trace.record_segment(self.name, t0, duration, count, direction)
+        self._record_segment(t0, duration, count, direction)
         self.position += count if direction else -count
         for listener in self._listeners:
             listener(self, t0, duration, count, direction)

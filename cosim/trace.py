@@ -24,6 +24,7 @@ from __future__ import annotations
 import json
 import re
 from array import array
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
 from pathlib import Path
@@ -128,6 +129,31 @@ class Trace:
         channel.duration.append(duration)
         channel.count.append(count)
         channel.direction.append(direction)
+
+    def recorder(self, name: str) -> Callable[[int, float], None]:
+        """``record(t, value)`` for one declared value signal, bound once (for per-slot hot paths)."""
+        channel = self._values[name]
+        t_append, v_append = channel.t.append, channel.v.append
+
+        def record(t: int, value: float) -> None:
+            t_append(t)
+            v_append(value)
+
+        return record
+
+    def segment_recorder(self, name: str) -> Callable[[int, int, int, int], None]:
+        """``record_segment(t0, duration, count, direction)`` for one declared pulse train, bound once."""
+        channel = self._pulses[name]
+        appends = (channel.t0.append, channel.duration.append, channel.count.append, channel.direction.append)
+        t0_append, duration_append, count_append, direction_append = appends
+
+        def record(t0: int, duration: int, count: int, direction: int) -> None:
+            t0_append(t0)
+            duration_append(duration)
+            count_append(count)
+            direction_append(direction)
+
+        return record
 
     def record_pulse(self, name: str, t: int, direction: int) -> None:
         """Record one pulse at tick ``t`` (for trains that are not evenly spread)."""

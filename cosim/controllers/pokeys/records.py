@@ -16,20 +16,21 @@ class Register:
     buffer level change every slot.
     """
 
-    __slots__ = ("_sim", "name", "value")
+    __slots__ = ("_record", "_sim", "name", "value")
 
     def __init__(self, sim: Simulation, name: str, *, unit: str, description: str) -> None:
         self._sim = sim
         self.name = name
         self.value = 0
         sim.trace.declare(name, "int", unit=unit, description=description)
-        sim.trace.record(name, sim.now, 0)
+        self._record = sim.trace.recorder(name)
+        self._record(sim.now, 0)
 
     def set(self, value: int, t: int | None = None) -> None:
         """Record ``value`` at ``t`` (default: now) if it changed."""
         if value != self.value:
             self.value = value
-            self._sim.trace.record(self.name, self._sim.now if t is None else t, value)
+            self._record(self._sim.now if t is None else t, value)
 
 
 @dataclass(frozen=True)
