@@ -16,8 +16,11 @@
  * j = 0, 1, ... not before t_anchor. A step covers [t_start, t_end): a pulse at t_end belongs to the
  * next step. Pulse instants derive from the pulse index j, never from a sum of periods.
  *
- * Integration: classic Runge-Kutta 4 between pulses, on equal sub-steps (t = a + (b - a) i / n) no
- * longer than the bound of step_bound(). Switch crossings are located by regula falsi (Illinois)
+ * Integration: classic Runge-Kutta 4 for the rotor between pulses, on equal sub-steps
+ * (t = a + (b - a) i / n) no longer than the bound of step_bound(). With L > 0 each rotor sub-step
+ * integrates the two phase currents first, by RK4 on finer sub-steps of at most current_tau / 4
+ * with the back-EMF linear in time over the rotor sub-step (from the state at its start and its
+ * derivative); the rotor's stages take the currents at the middle and the end. Switch crossings are located by regula falsi (Illinois)
  * to a bracket narrower than EVENT_TOL; with FMI 3.0 early return the step stops just after the
  * crossing, otherwise the step goes on. */
 #include <math.h>
@@ -37,6 +40,8 @@ typedef struct {
     double ia_cmd, ib_cmd;
     int ideal; /* currents equal the commanded ones */
     double inductance, resistance, voltage, tau;
+    double loop_gain;      /* L / current_tau [ohm] */
+    double inv_inductance; /* 1 / L [1/H] (0 with an ideal source) */
     double h_fixed;        /* [s] the sub-step bound that does not depend on speed (see step_bound) */
     double electrical_per_step; /* [rad] electrical angle of one microstep */
 } Dynamics;
@@ -81,14 +86,13 @@ static void dynamics(const ModelInstance *m, Dynamics *d) {
     d->resistance = m->v.phase_resistance;
     d->voltage = m->v.supply_voltage;
     d->tau = m->v.current_tau;
-    /* max_step, 1/50 of the small-signal natural period, 1/4 of the current loop's time constant */
+    d->loop_gain = d->ideal ? 0.0 : d->inductance / d->tau;
+    d->inv_inductance = d->ideal ? 0.0 : 1.0 / d->inductance;
+    /* max_step and 1/50 of the small-signal natural period (the current loop has its own sub-steps) */
     d->h_fixed = m->v.max_step;
     stiffness = d->nr * (d->kt * m->v.current + 4.0 * d->td);
     if (stiffness > 0.0) {
         d->h_fixed = fmin(d->h_fixed, TWO_PI / sqrt(stiffness / d->inertia) / 50.0);
-    }
-    if (!d->ideal) {
-        d->h_fixed = fmin(d->h_fixed, d->tau / 4.0);
     }
     d->electrical_per_step = TWO_PI / (4.0 * (double)m->v.microsteps);
 }
@@ -96,13 +100,13 @@ static void dynamics(const ModelInstance *m, Dynamics *d) {
 static double clamp(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
 /* Motor torque from s = sin(Nr theta), c = cos(Nr theta); sin(4 Nr theta) = 4 s c (c^2 - s^2). */
-static double torque_sc(const Dynamics *d, const MotorState *x, double s, double c) {
-    return -d->kt * x->ia * s + d->kt * x->ib * c - d->td * 4.0 * s * c * (c * c - s * s);
+static double torque_sc(const Dynamics *d, double ia, double ib, double s, double c) {
+    return d->kt * (ib * c - ia * s) - d->td * 4.0 * s * c * (c * c - s * s);
 }
 
 static double motor_torque(const Dynamics *d, const MotorState *x) {
     const double e = d->nr * x->theta;
-    return torque_sc(d, x, sin(e), cos(e));
+    return torque_sc(d, x->ia, x->ib, sin(e), cos(e));
 }
 
 /* Torque on the shaft except Coulomb friction. */
@@ -124,52 +128,105 @@ static double friction_torque(const Dynamics *d, double omega, double drive) {
     return clamp(drive, -d->friction, d->friction);
 }
 
-/* One sine and one cosine per evaluation (the compiler merges them), shared by torque and EMF. */
-static void derivatives(const Dynamics *d, const MotorState *x, MotorState *dx) {
-    const double e = d->nr * x->theta, s = sin(e), c = cos(e);
-    const double drive = torque_sc(d, x, s, c) - d->damping * x->omega - d->load;
-    dx->theta = x->omega;
-    dx->omega = (drive - friction_torque(d, x->omega, drive)) / d->inertia;
-    if (d->ideal) {
-        dx->ia = 0.0;
-        dx->ib = 0.0;
-    } else {
-        const double emf_a = -d->kt * x->omega * s, emf_b = d->kt * x->omega * c;
-        const double va = clamp(d->resistance * x->ia + emf_a + d->inductance * (d->ia_cmd - x->ia) / d->tau,
-                                -d->voltage, d->voltage);
-        const double vb = clamp(d->resistance * x->ib + emf_b + d->inductance * (d->ib_cmd - x->ib) / d->tau,
-                                -d->voltage, d->voltage);
-        dx->ia = (va - d->resistance * x->ia - emf_a) / d->inductance;
-        dx->ib = (vb - d->resistance * x->ib - emf_b) / d->inductance;
+/* Rotor acceleration [rad/s^2] at angle theta and speed omega with the phase currents ia, ib,
+ * from s = sin(Nr theta), c = cos(Nr theta). */
+static double acceleration(const Dynamics *d, double omega, double ia, double ib, double s, double c) {
+    const double drive = torque_sc(d, ia, ib, s, c) - d->damping * omega - d->load;
+    return (drive - friction_torque(d, omega, drive)) / d->inertia;
+}
+
+/* The current loop's voltage demand R i + e + L (i_cmd - i) / current_tau (before the bus clamp). */
+static double demand(const Dynamics *d, double i, double i_cmd, double e) {
+    return d->resistance * i + e + d->loop_gain * (i_cmd - i);
+}
+
+/* di/dt of one phase with back-EMF e and commanded current i_cmd: the current loop's voltage,
+ * clamped to the bus, drives L di/dt = v - R i - e. */
+static double current_slope(const Dynamics *d, double i, double i_cmd, double e) {
+    const double v = clamp(demand(d, i, i_cmd, e), -d->voltage, d->voltage);
+    return (v - d->resistance * i - e) * d->inv_inductance;
+}
+
+/* Both phase currents over [0, h] with the back-EMFs taken linear in time, e(t) = e0 + de t, on n
+ * (even) equal sub-steps of at most current_tau / 4. A sub-step on which the loop's voltage stays
+ * within the bus at both ends is the loop's exact solution, i_cmd + (i - i_cmd) exp(-t / tau)
+ * (no back-EMF in it); one on which it saturates is RK4. Returns the currents at h / 2 and at h. */
+static void currents(const Dynamics *d, const double i0[2], const double i_cmd[2], const double e0[2],
+                     const double de[2], double h, double mid[2], double end[2]) {
+    const long half = (long)ceil(h / (0.5 * d->tau) - 1e-9) > 1 ? (long)ceil(h / (0.5 * d->tau) - 1e-9) : 1;
+    const long n = 2 * half;
+    const double hc = h / (double)n, decay = exp(-hc / d->tau);
+    int p;
+    for (p = 0; p < 2; p++) {
+        double i = i0[p];
+        long k;
+        for (k = 0; k < n; k++) {
+            const double t0 = hc * (double)k, ea = e0[p] + de[p] * t0, eb = e0[p] + de[p] * (t0 + hc);
+            const double tracked = i_cmd[p] + (i - i_cmd[p]) * decay;
+            if (fabs(demand(d, i, i_cmd[p], ea)) <= d->voltage && fabs(demand(d, tracked, i_cmd[p], eb)) <= d->voltage) {
+                i = tracked;
+            } else {
+                const double em = e0[p] + de[p] * (t0 + 0.5 * hc);
+                const double k1 = current_slope(d, i, i_cmd[p], ea);
+                const double k2 = current_slope(d, i + 0.5 * hc * k1, i_cmd[p], em);
+                const double k3 = current_slope(d, i + 0.5 * hc * k2, i_cmd[p], em);
+                const double k4 = current_slope(d, i + hc * k3, i_cmd[p], eb);
+                i += hc / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            }
+            if (k + 1 == half) {
+                mid[p] = i;
+            }
+        }
+        end[p] = i;
     }
 }
 
-static void axpy(const MotorState *x, double h, const MotorState *k, MotorState *out) {
-    out->theta = x->theta + h * k->theta;
-    out->omega = x->omega + h * k->omega;
-    out->ia = x->ia + h * k->ia;
-    out->ib = x->ib + h * k->ib;
-}
-
-/* One Runge-Kutta 4 step of size h from x0, then the stick check of Coulomb friction. */
+/* One step of size h from x0: RK4 for the rotor; the currents (when L > 0) follow their loop
+ * over the step on finer sub-steps (currents()), with the back-EMF linearised from x0 and its
+ * rate of change. Then the stick check of Coulomb friction. */
 static void rk4(const Dynamics *d, const MotorState *x0, double h, MotorState *x1) {
-    MotorState k1, k2, k3, k4, tmp;
-    derivatives(d, x0, &k1);
-    axpy(x0, 0.5 * h, &k1, &tmp);
-    derivatives(d, &tmp, &k2);
-    axpy(x0, 0.5 * h, &k2, &tmp);
-    derivatives(d, &tmp, &k3);
-    axpy(x0, h, &k3, &tmp);
-    derivatives(d, &tmp, &k4);
-    x1->theta = x0->theta + h / 6.0 * (k1.theta + 2.0 * k2.theta + 2.0 * k3.theta + k4.theta);
-    x1->omega = x0->omega + h / 6.0 * (k1.omega + 2.0 * k2.omega + 2.0 * k3.omega + k4.omega);
-    x1->ia = x0->ia + h / 6.0 * (k1.ia + 2.0 * k2.ia + 2.0 * k3.ia + k4.ia);
-    x1->ib = x0->ib + h / 6.0 * (k1.ib + 2.0 * k2.ib + 2.0 * k3.ib + k4.ib);
+    double s = sin(d->nr * x0->theta), c = cos(d->nr * x0->theta);
+    double ia_m = x0->ia, ib_m = x0->ib, ia_e = x0->ia, ib_e = x0->ib;
+    double w1, a1, w2, a2, w3, a3, w4, a4, th;
+    w1 = x0->omega;
+    a1 = acceleration(d, w1, x0->ia, x0->ib, s, c);
+    if (!d->ideal) {
+        const double i0[2] = {x0->ia, x0->ib}, i_cmd[2] = {d->ia_cmd, d->ib_cmd};
+        const double ws = d->kt * x0->omega;
+        const double e0[2] = {-ws * s, ws * c};
+        const double spin = d->nr * x0->omega * x0->omega;
+        const double de[2] = {-d->kt * (a1 * s + spin * c), d->kt * (a1 * c - spin * s)};
+        double mid[2], end[2];
+        currents(d, i0, i_cmd, e0, de, h, mid, end);
+        ia_m = mid[0];
+        ib_m = mid[1];
+        ia_e = end[0];
+        ib_e = end[1];
+    }
+    th = x0->theta + 0.5 * h * w1;
+    w2 = x0->omega + 0.5 * h * a1;
+    s = sin(d->nr * th);
+    c = cos(d->nr * th);
+    a2 = acceleration(d, w2, ia_m, ib_m, s, c);
+    th = x0->theta + 0.5 * h * w2;
+    w3 = x0->omega + 0.5 * h * a2;
+    s = sin(d->nr * th);
+    c = cos(d->nr * th);
+    a3 = acceleration(d, w3, ia_m, ib_m, s, c);
+    th = x0->theta + h * w3;
+    w4 = x0->omega + h * a3;
+    s = sin(d->nr * th);
+    c = cos(d->nr * th);
+    a4 = acceleration(d, w4, ia_e, ib_e, s, c);
+    x1->theta = x0->theta + h / 6.0 * (w1 + 2.0 * w2 + 2.0 * w3 + w4);
+    x1->omega = x0->omega + h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    x1->ia = ia_e;
+    x1->ib = ib_e;
     if (d->friction > 0.0 && x0->omega != 0.0) {
         /* The rotor comes to rest inside this step if its deceleration at the start stops it within
          * h (RK4 stages on both sides of the friction discontinuity would otherwise leave a small
          * spurious speed). It then stays at rest if friction can hold it. */
-        const double a0 = k1.omega;
+        const double a0 = a1;
         MotorState rest = *x1;
         rest.omega = 0.0;
         if ((x0->omega * a0 < 0.0 && fabs(x0->omega) <= fabs(a0) * h) || x0->omega * x1->omega < 0.0) {
@@ -182,9 +239,8 @@ static void rk4(const Dynamics *d, const MotorState *x0, double h, MotorState *x
     }
 }
 
-/* Largest sub-step [s]: max_step, 1/50 of the small-signal natural period, 1/4 of the current
- * loop's time constant (Dynamics.h_fixed), and 0.25 rad of electrical angle at the faster of the
- * rotor's speed and the commanded speed. */
+/* Largest sub-step [s]: max_step, 1/50 of the small-signal natural period (Dynamics.h_fixed), and
+ * 0.25 rad of electrical angle at the faster of the rotor's speed and the commanded speed. */
 static double step_bound(const ModelInstance *m, const Dynamics *d, double omega) {
     const double electrical_speed = fmax(d->nr * fabs(omega), fabs(m->s.rate) * d->electrical_per_step);
     return electrical_speed > 0.0 ? fmin(d->h_fixed, 0.25 / electrical_speed) : d->h_fixed;
