@@ -1,7 +1,8 @@
 """Real-time factor of the PoKeys pulse engine on a 60 s 3-axis job at up to 25 kHz, beside a naive model.
 
 The same job runs in one process: through :class:`PulseEngine` (one pulse-train segment per slot
-and axis) alone, through it with three Stepper FMUs (NEMA 17 preset, FMI 3.0) coupled by
+and axis) alone, through it with three Stepper FMUs (NEMA 17 preset with its L/R current loop,
+FMI 3.0, ``max_step`` 100 us so that the FMU's own bounds set its steps) coupled by
 :func:`~cosim.controllers.pokeys.plant.couple_stepper`, and through :class:`NaivePulseEngine` (one
 SimPy event per pulse). All are fed by the host model over the USB link. Then every pulse of the
 segment run is checked (at most 25 per slot, spacing, direction set-up) and the steppers'
@@ -10,12 +11,14 @@ FMUs = the difference between the runs with and without them, checks) and the re
 (simulated time / wall time). Run::
 
     .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive] [--no-steppers] [--ideal-driver]
+                                           [--max-step 1e-4]
 """
 
 from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable, Mapping, Sequence
 
 from cosim.checks import DirectionSetup, MinPulseSpacing, PulsesPerWindow
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
@@ -26,6 +29,7 @@ from cosim.controllers.pokeys.plant import couple_stepper
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.presets import load_preset
+from cosim.signals import Signal
 
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
 
@@ -41,18 +45,44 @@ def job(seconds: int, config: EngineConfig) -> list[bytes]:
     return to_entries(counts)
 
 
-IDEAL_DRIVER = {"phase_inductance": 0.0, "max_step": 1e-4}  # ideal current source, 100 us solver steps at most
+IDEAL_DRIVER = {"phase_inductance": 0.0}  # ideal current source: no L/R current loop
+MAX_STEP_S = 1e-4  # the FMU's solver: its own bounds (natural period / 50, 0.25 rad electrical, pulses) govern
+
+
+class StandIn:
+    """A plant that takes every input and does nothing: measures the coupling's own cost."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def set(self, values: Mapping[str, float]) -> None:
+        pass
+
+    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
+        return lambda values: None
+
+    def read(self, variable: str) -> object:
+        return 0
+
+    def watch(self, variable: str) -> Signal:
+        raise NotImplementedError
 
 
 def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig, *,
-             steppers: bool = False, ideal_driver: bool = False) -> tuple[Simulation, float, int]:
-    """Run the job; with ``steppers`` three Stepper FMUs (loaded before the clock starts) follow the axes."""
+             steppers: bool = False, stand_ins: bool = False, ideal_driver: bool = False,
+             max_step_s: float = MAX_STEP_S) -> tuple[Simulation, float, int]:
+    """Run the job; with ``steppers`` three Stepper FMUs (loaded before the clock starts) follow the
+    axes, with ``stand_ins`` three plants that do nothing."""
     sim = Simulation(seed=1)
     engine = kind(sim, config)
     HostApp(sim, engine, entries, link="usb", prefill_slots=100, period_ns=10_000_000)
     plants = []
+    if stand_ins:
+        for i, a in enumerate(AXES):
+            couple_stepper(sim, engine, i, StandIn(f"stand_in_{a}"))
     if steppers:
-        preset = {**load_preset("nema17_17hs16_2004s1"), **(IDEAL_DRIVER if ideal_driver else {})}
+        preset = {**load_preset("nema17_17hs16_2004s1"), "max_step": max_step_s,
+                  **(IDEAL_DRIVER if ideal_driver else {})}
         plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", parameters=preset) for a in AXES]
         for i, plant in enumerate(plants):
             couple_stepper(sim, engine, i, plant)
@@ -74,7 +104,9 @@ def main() -> None:
     parser.add_argument("--no-naive", action="store_true", help="skip the naive per-pulse model")
     parser.add_argument("--no-steppers", action="store_true", help="skip the run with three stepper FMUs")
     parser.add_argument("--ideal-driver", action="store_true",
-                        help="stepper FMUs with an ideal current source and max_step 100 us (faster, no L/R dynamics)")
+                        help="stepper FMUs with an ideal current source (no L/R current loop)")
+    parser.add_argument("--max-step", type=float, default=MAX_STEP_S,
+                        help=f"the stepper FMUs' max_step [s] (default {MAX_STEP_S:g}; the FMU's own default is 10e-6)")
     args = parser.parse_args()
 
     config = EngineConfig(axes=uniform_axes(max_speed_hz=25_000, accel=500_000, decel=500_000))
@@ -102,10 +134,15 @@ def main() -> None:
     total = engine_s + checks_s
     print(f"  engine + checks                          {total:8.3f} s   RTF {simulated_s / total:7.1f}x")
     if not args.no_steppers:
-        _, coupled_s, _ = simulate(PulseEngine, entries, config, steppers=True, ideal_driver=args.ideal_driver)
-        fmus_s = coupled_s - engine_s
+        _, stand_in_s, _ = simulate(PulseEngine, entries, config, stand_ins=True)
+        print(f"  engine + host + coupling to 3 stand-ins   {stand_in_s:8.3f} s   (the coupling alone: "
+              f"{stand_in_s - engine_s:.3f} s)")
+        _, coupled_s, _ = simulate(PulseEngine, entries, config, steppers=True, ideal_driver=args.ideal_driver,
+                                   max_step_s=args.max_step)
         print(f"  engine + host + 3 stepper FMUs           {coupled_s:8.3f} s   RTF {simulated_s / coupled_s:7.1f}x")
-        print(f"    of which the FMUs and their coupling   {fmus_s:8.3f} s   (commanded_steps = counters: checked)")
+        print(f"    of which the FMUs and their coupling   {coupled_s - engine_s:8.3f} s   "
+              "(commanded_steps = counters: checked)")
+        print(f"    of which the FMU calls (adapter + C)   {coupled_s - stand_in_s:8.3f} s")
         full = coupled_s + checks_s
         print(f"  engine + FMUs + checks (the issue's job) {full:8.3f} s   RTF {simulated_s / full:7.1f}x")
     if not args.no_naive:
