@@ -184,6 +184,70 @@ class Trace:
         i = int(np.searchsorted(times, t, side="right")) - 1
         return float(values[i]) if i >= 0 else float("nan")
 
+    def values_at(self, name: str, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """Values of a piecewise-constant signal at the ticks ``t`` (NaN before its first record).
+
+        The vectorised :meth:`value_at`: the value in effect at each instant is the last change at
+        or before it.
+
+        Examples
+        --------
+        >>> trace = Trace()
+        >>> trace.declare("dev.axis1.mode", "int")
+        >>> trace.record("dev.axis1.mode", 100, 1); trace.record("dev.axis1.mode", 250, 2)
+        >>> trace.values_at("dev.axis1.mode", [0, 100, 249, 250, 900]).tolist()
+        [nan, 1.0, 1.0, 2.0, 2.0]
+        """
+        times, values = self.edges(name)
+        i = np.searchsorted(times, np.asarray(t, dtype=np.int64), side="right") - 1
+        return np.where(i >= 0, values[np.maximum(i, 0)] if values.size else np.nan, np.nan)
+
+    def positions_at(self, name: str, t: npt.ArrayLike) -> npt.NDArray[np.int64]:
+        """Signed pulse count of a pulse train up to and including each tick of ``t`` (dir 1 counts up).
+
+        The axis position an encoder or a driver would show at those instants, from every pulse
+        (segments and single pulses).
+
+        Examples
+        --------
+        >>> trace = Trace()
+        >>> trace.declare("dev.x.step", "pulse")
+        >>> trace.record_segment("dev.x.step", 0, 1000, 4, 1)      # pulses at 0, 250, 500, 750
+        >>> trace.record_segment("dev.x.step", 1000, 1000, 2, 0)   # back at 1000, 1500
+        >>> trace.positions_at("dev.x.step", [-1, 0, 600, 999, 1000, 2000]).tolist()
+        [0, 1, 3, 4, 3, 2]
+        """
+        times, direction = self.pulses(name)
+        position = np.concatenate(([0], np.cumsum(np.where(direction == 1, 1, -1), dtype=np.int64)))
+        return position[np.searchsorted(times, np.asarray(t, dtype=np.int64), side="right")]
+
+    def pulses_per_window(self, name: str, window: int, *, start: int = 0,
+                          end: int | None = None) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+        """Pulses of a pulse train in each window ``[start + k window, start + (k + 1) window)``.
+
+        Parameters
+        ----------
+        name : str
+            A pulse train.
+        window : int
+            Window length [ticks] (> 0), e.g. a controller's slot or servo period.
+        start, end : int
+            First window's start; the windows cover ``[start, end)`` (default: to the trace's end,
+            or its last pulse if later).
+
+        Returns
+        -------
+        (window starts, counts) : two arrays of int
+            Counts of both directions; divide by ``window`` for a rate.
+        """
+        window = self.timebase.check_ticks(window, name="window", minimum=1)
+        times, _ = self.pulses(name)
+        last = max(self.end_t, int(times[-1]) + 1 if times.size else 0) if end is None else end
+        n = max(-(-(last - start) // window), 0)
+        inside = times[(times >= start) & (times < start + n * window)]
+        counts = np.bincount((inside - start) // window, minlength=n).astype(np.int64)
+        return start + window * np.arange(n, dtype=np.int64), counts
+
     def segments(self, name: str) -> dict[str, npt.NDArray[np.int64]]:
         """Raw pulse segments of a pulse train: arrays ``t0, duration, count, dir``."""
         if name not in self._pulses:

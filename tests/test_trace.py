@@ -52,6 +52,26 @@ def test_edges_and_pulses_are_exact(sim: Simulation) -> None:
     assert sim.trace.value_at("dev.axis1.count", 1999) == 7
 
 
+def test_values_and_positions_at_instants_follow_the_diagram(sim: Simulation) -> None:
+    _scenario(sim)
+    ticks = [0, 999, 1000, 1333, 1999, 2000, 2499, 2500, 2999]
+    assert sim.trace.values_at("dev.axis1.count", ticks).tolist() == [0, 0, 7, 7, 7, 9, 9, 9, 9]
+    # up 1000, 1333, 1666; down 2000, 2500: a pulse counts from its own instant on
+    assert sim.trace.positions_at("dev.axis1.step", ticks).tolist() == [0, 0, 1, 2, 3, 2, 2, 1, 1]
+    assert np.isnan(sim.trace.values_at("dev.power", [-1])[0])  # before its first record
+
+
+def test_pulses_per_window_counts_each_window_whatever_the_direction(sim: Simulation) -> None:
+    _scenario(sim)
+    starts, counts = sim.trace.pulses_per_window("dev.axis1.step", 500)
+    assert starts.tolist() == [0, 500, 1000, 1500, 2000, 2500]  # to the trace's end at 3000
+    assert counts.tolist() == [0, 0, 2, 1, 1, 1]
+    starts, counts = sim.trace.pulses_per_window("dev.axis1.step", 1000, start=1000, end=2000)
+    assert starts.tolist() == [1000] and counts.tolist() == [3]
+    with pytest.raises(ConfigurationError, match="window"):
+        sim.trace.pulses_per_window("dev.axis1.step", 0)
+
+
 def test_setting_the_same_value_records_nothing(sim: Simulation) -> None:
     gate = Signal(sim, "dev.gate")
     assert not gate.set(0)
