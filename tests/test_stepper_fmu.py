@@ -36,11 +36,13 @@ from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.plants.stepper import (
     StepperParameters,
+    drive_slots,
     linear_model,
     max_acceleration_rad_s2,
     phase_after,
     pulse_instants,
     segment_inputs,
+    trapezoid_rates,
 )
 from cosim.presets import load_preset, read_preset
 from cosim.signals import Signal
@@ -70,26 +72,6 @@ def advance(fmu: Fmu, t: int) -> None:
     """Advance to ``t`` through any early returns at switch events."""
     while fmu.advance_to(t) < t:
         pass
-
-
-def drive_slots(fmu: Fmu, rates_hz: list[Fraction], *, t0: int = 0, slot_ns: int = MS) -> int:
-    """One FMU step per slot at a held rate, the phase carried on exactly; returns the pulse count."""
-    phase = Fraction(0)
-    slot_s = Fraction(slot_ns, 10**9)
-    count = 0
-    for k, rate in enumerate(rates_hz):
-        fmu.set("step_rate", float(rate))
-        fmu.set("step_phase", float(phase))
-        advance(fmu, t0 + (k + 1) * slot_ns)
-        count += len(pulse_instants(Fraction(0), slot_s, rate_hz=rate, phase=phase))
-        phase = phase_after(slot_s, rate_hz=rate, phase=phase)
-    fmu.set("step_rate", 0.0)
-    return count
-
-
-def trapezoid(top_hz: int, *, ramp_slots: int, hold_slots: int) -> list[Fraction]:
-    up = [Fraction(top_hz * (k + 1), ramp_slots) for k in range(ramp_slots)]
-    return up + [Fraction(top_hz)] * hold_slots + up[::-1][1:]
 
 
 # -- the FMU as a standard FMU -----------------------------------------------------------------
@@ -263,7 +245,7 @@ def test_disabled_driver_ignores_pulses_and_releases_the_rotor(stepper_fmu: Path
 # -- motion ------------------------------------------------------------------------------------------
 def test_follows_every_step_inside_the_pull_out_curve(stepper_fmu: Path) -> None:
     """NEMA 17 preset with a 1 kg carriage: 0 -> 5 rev/s in 100 ms, 50 ms at speed, back to 0."""
-    rates = trapezoid(5 * 200 * 16, ramp_slots=100, hold_slots=50)
+    rates = trapezoid_rates(5 * 200 * 16, ramp_slots=100, hold_slots=50)
     with Fmu(stepper_fmu, parameters={**load_preset(NEMA17), "carriage_mass": 1.0}) as fmu:
         count = drive_slots(fmu, rates)
         advance(fmu, (len(rates) + 300) * MS)  # settle
@@ -279,7 +261,7 @@ def test_loses_steps_beyond_the_pull_out_torque_and_reports_it(stepper_fmu: Path
     preset = load_preset(NEMA17)
     params = StepperParameters.from_parameters({**preset, "load_inertia": 20 * preset["rotor_inertia"]})
     assert max_acceleration_rad_s2(params) < 2 * math.pi * 10 / 0.010
-    rates = trapezoid(10 * 200 * 16, ramp_slots=10, hold_slots=20)
+    rates = trapezoid_rates(10 * 200 * 16, ramp_slots=10, hold_slots=20)
     with Fmu(stepper_fmu, parameters={**preset, "load_inertia": params.load_inertia}) as fmu:
         count = drive_slots(fmu, rates)
         advance(fmu, (len(rates) + 100) * MS)
@@ -368,7 +350,7 @@ def test_pull_out_torque_falls_with_speed_as_back_emf_eats_the_bus_voltage(
         stepper_fmu: Path, rev_per_s: int, supply_voltage: float, loses: bool) -> None:
     """NEMA 17 preset against 0.2 N.m (63 % of Kt I): fine at 10 rev/s on 24 V; at 20 rev/s the
     back-EMF (Kt w = 20 V) leaves too little voltage to drive the current, unless the bus is higher."""
-    rates = trapezoid(rev_per_s * 200 * 16, ramp_slots=100, hold_slots=50)
+    rates = trapezoid_rates(rev_per_s * 200 * 16, ramp_slots=100, hold_slots=50)
     params = {**load_preset(NEMA17), "load_torque": 0.2, "supply_voltage": supply_voltage}
     with Fmu(stepper_fmu, parameters=params) as fmu:
         drive_slots(fmu, rates)
@@ -542,3 +524,14 @@ def test_pulse_rule_helpers_refuse_bad_values() -> None:
     with pytest.raises(ConfigurationError, match="direction = 0 is not allowed"):
         segment_inputs(MS, 3, 0)
     assert pulse_instants(Fraction(0), Fraction(1), rate_hz=Fraction(0), phase=Fraction(0)) == []
+
+
+def test_drive_slots_counts_signed_pulses_and_refuses_a_bad_slot(stepper_fmi3: Path) -> None:
+    """3 kHz for two slots, then -1.5 kHz for two: 6 pulses out, 3 back (the phase carries 1.5 per slot)."""
+    with Fmu(stepper_fmi3) as fmu:
+        rates = [Fraction(3000)] * 2 + [Fraction(-1500)] * 2
+        assert drive_slots(fmu, rates) == 6 - 3 == fmu.get("commanded_steps")
+        assert fmu.t == 4 * MS and fmu.get("step_rate") == 0.0
+        with pytest.raises(ConfigurationError, match=r"slot_ns = 0 is not allowed \(allowed: >= 1 tick\)"):
+            drive_slots(fmu, rates, slot_ns=0)
+    assert trapezoid_rates(3000, ramp_slots=3, hold_slots=1, down=False) == [1000, 2000, 3000, 3000]

@@ -16,13 +16,14 @@ one FMU step per slot. Around a full-step position the motor is a spring-mass sy
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from fractions import Fraction
 from functools import cache
-from typing import Any
+from typing import Any, Protocol
 
 from cosim.errors import ConfigurationError
+from cosim.timebase import TimeBase
 
 SUPPORTED_MICROSTEPS = (1, 2, 4, 8, 16, 32, 64, 128, 256)
 
@@ -253,3 +254,78 @@ def segment_inputs(duration_ns: int, count: int, direction: int) -> tuple[float,
     if direction not in (1, -1):
         raise ConfigurationError.out_of_range("direction", direction, "1 or -1")
     return direction * count * 1e9 / duration_ns, 0.0
+
+
+# -- driving the FMU on its own -------------------------------------------------------------------
+class _SteppedFmu(Protocol):
+    t: int
+    timebase: TimeBase
+
+    def set(self, name: str, value: float) -> None: ...
+
+    def advance_to(self, t: int) -> int: ...
+
+
+def trapezoid_rates(top_hz: int, *, ramp_slots: int, hold_slots: int,
+                    down: bool = True) -> list[Fraction]:
+    """Step rates per slot [pulses/s] of a trapezoid: ``ramp_slots`` up to ``top_hz``, held, and back.
+
+    Examples
+    --------
+    >>> [int(r) for r in trapezoid_rates(3000, ramp_slots=3, hold_slots=2)]
+    [1000, 2000, 3000, 3000, 3000, 2000, 1000]
+    """
+    if ramp_slots < 1 or hold_slots < 0:
+        raise ConfigurationError.out_of_range("ramp_slots, hold_slots", (ramp_slots, hold_slots), ">= 1, >= 0")
+    up = [Fraction(top_hz * (k + 1), ramp_slots) for k in range(ramp_slots)]
+    return up + [Fraction(top_hz)] * hold_slots + (up[::-1][1:] if down else [])
+
+
+def drive_slots(fmu: _SteppedFmu, rates_hz: Sequence[Fraction], *, slot_ns: int = 1_000_000,
+                stop: bool = True) -> int:
+    """Drive a Stepper FMU slot by slot from its current time, the way a slot-based controller does.
+
+    At the start of slot k the held rate ``rates_hz[k]`` and the exact phase that continues the
+    train (:func:`phase_after`) are set; the FMU then advances to the slot's end, through any
+    early returns at switch events. Times are integer ticks of the FMU's time base.
+
+    Parameters
+    ----------
+    fmu : cosim.fmu.Fmu
+        A Stepper FMU (standalone, not in a :class:`~cosim.kernel.Simulation`).
+    rates_hz : sequence of Fraction
+        Signed step rate per slot [pulses/s].
+    slot_ns : int
+        Slot length [ticks of the FMU's time base] (1 ms at the default 1 ns).
+    stop : bool
+        Set ``step_rate = 0`` after the last slot.
+
+    Returns
+    -------
+    int
+        Pulses commanded, counted by the pulse rule (:func:`pulse_instants`), signed.
+
+    Examples
+    --------
+    ::
+
+        with Fmu(ensure_fmu("Stepper"), parameters=load_preset("nema17_17hs16_2004s1")) as fmu:
+            pulses = drive_slots(fmu, trapezoid_rates(16_000, ramp_slots=100, hold_slots=50))
+            print(pulses, fmu.get("lost_full_steps"))
+    """
+    if slot_ns < 1:
+        raise ConfigurationError.out_of_range("slot_ns", slot_ns, ">= 1 tick")
+    t0, slot_s = fmu.t, slot_ns * fmu.timebase.resolution_s
+    phase, count = Fraction(0), 0
+    for k, rate in enumerate(rates_hz):
+        fmu.set("step_rate", float(rate))
+        fmu.set("step_phase", float(phase))
+        t_end = t0 + (k + 1) * slot_ns
+        while fmu.advance_to(t_end) < t_end:
+            pass
+        pulses = len(pulse_instants(Fraction(0), slot_s, rate_hz=rate, phase=phase))
+        count += pulses if rate > 0 else -pulses
+        phase = phase_after(slot_s, rate_hz=rate, phase=phase)
+    if stop:
+        fmu.set("step_rate", 0.0)
+    return count
