@@ -43,6 +43,8 @@ UNITS: dict[str, tuple[dict[str, int], float]] = {
     "V.s/rad": ({"kg": 1, "m": 2, "s": -2, "A": -1, "rad": -1}, 1.0),
     "Ohm": ({"kg": 1, "m": 2, "s": -3, "A": -2}, 1.0),
     "H": ({"kg": 1, "m": 2, "s": -2, "A": -2}, 1.0),
+    "counts/m": ({"m": -1}, 1.0),  # encoder counts per metre (counts are dimensionless)
+    "V/V": ({}, 1.0),         # a voltage gain (dimensionless)
 }
 
 _TYPES = {"Float64": ("double", "VT_FLOAT64", "Real"), "Int32": ("int32_t", "VT_INT32", "Integer"),

@@ -230,7 +230,7 @@ def test_watched_mark_sensor_is_published_at_the_edge_ticks(sim: Simulation) -> 
         ({"mark_pitch": 0.01}, "parameter mark_pitch = 0.01 m is not allowed (allowed: > mark_length = 0.01 m)"),
         ({"mark_pitch": 0.005}, "parameter mark_pitch = 0.0050000000000000001 m is not allowed "
                                 "(allowed: > mark_length = 0.01 m)"),
-        ({"counts_per_metre": 0.0}, "parameter counts_per_metre = 0 is not allowed (allowed: > 0)"),
+        ({"counts_per_metre": 0.0}, "parameter counts_per_metre = 0 counts/m is not allowed (allowed: > 0 counts/m)"),
         ({"tau_drive": -0.05}, "parameter tau_drive = -0.050000000000000003 s is not allowed (allowed: > 0 s)"),
         ({"mark_length": 0.0}, "parameter mark_length = 0 m is not allowed (allowed: > 0 m)"),
         ({"ripple_amplitude": -1.0}, "parameter ripple_amplitude = -1 m/s is not allowed (allowed: >= 0 m/s)"),
