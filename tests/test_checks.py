@@ -40,6 +40,7 @@ from cosim.checks import (
     pulse_timing,
     result,
 )
+from cosim.controllers.pokeys import EngineState, PulseEngine, encode_entry
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.runner import run_scenario
@@ -674,3 +675,20 @@ def test_a_misspelled_signal_in_a_scenario_is_an_error_with_a_suggestion(tmp_pat
 def test_docstring_examples(module: object) -> None:
     failures, _ = doctest.testmod(module, optionflags=doctest.ELLIPSIS)  # type: ignore[arg-type]
     assert failures == 0
+
+
+def test_the_custom_check_of_the_docs_runs_as_shown() -> None:
+    """docs/checks.md, 'Writing your own check': its code, on the slots 0 2 4 6 14 14 10 (then 0)."""
+    text = (Path(__file__).parents[1] / "docs" / "checks.md").read_text()
+    section = text.split("## Writing your own check", 1)[1]
+    namespace: dict[str, object] = {}
+    exec(section.split("```python\n", 1)[1].split("```", 1)[0], namespace)  # the page's own code
+    sim = Simulation()
+    engine = PulseEngine(sim)
+    engine.fill_buffer([encode_entry((c, 0, 0)) for c in (0, 2, 4, 6, 14, 14, 10)])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=10_000_000)
+    check = namespace["MaxCountStep"]("pokeys.x.step", 1_000_000, 4)  # type: ignore[operator]
+    result = check.evaluate(sim.trace)
+    assert result.summary() in section  # the output the page shows
+    assert [v.t_ns for v in result.violations] == [4_000_000, 7_000_000]  # 6 -> 14, then 10 -> 0

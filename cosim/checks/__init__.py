@@ -18,7 +18,7 @@ Examples
 'PASS MaxPulseRate(pokeys.x.step): 25 checked, 0 violations'
 """
 
-from cosim.checks.base import Check, Clock
+from cosim.checks.base import Check, Clock, Findings
 from cosim.checks.direction import DirectionSetup
 from cosim.checks.duration import Duration, EdgeRef, PulseRef
 from cosim.checks.edge_position import EdgeAtPosition
@@ -36,6 +36,7 @@ __all__ = [
     "Duration",
     "EdgeAtPosition",
     "EdgeRef",
+    "Findings",
     "IntervalsAbove",
     "IntervalsBelow",
     "MaxPulseRate",
