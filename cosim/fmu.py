@@ -314,6 +314,9 @@ class Fmu:
         component = self._fmu.component
 
         def write(values: Sequence[float]) -> None:
+            if len(values) != n:
+                raise ConfigurationError(f"{self.instance_name}: {len(values)} values for {n} variables "
+                                         f"({', '.join(names)})")
             for i, x in enumerate(values):
                 buffer[i] = x
             status = put(component, vrs, n, buffer, *tail)

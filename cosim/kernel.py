@@ -128,6 +128,10 @@ class Simulation:
         earliest queued event is strictly after ``t``, so the run is the same as with an event at
         ``t``, at a fraction of the cost. A run's ``until`` is a queued event: never skipped past.
 
+        Call it only from a process resumed by an event of its own (an ``At`` that nothing else
+        waits on): other callbacks of a shared event would run after the jump and see the later
+        clock.
+
         Returns
         -------
         bool

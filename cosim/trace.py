@@ -184,6 +184,10 @@ class Trace:
         i = int(np.searchsorted(times, t, side="right")) - 1
         return float(values[i]) if i >= 0 else float("nan")
 
+    def drop_pulse_cache(self) -> None:
+        """Forget the materialised pulse arrays kept by :meth:`pulses` (to free memory, or to time it)."""
+        self._pulse_cache.clear()
+
     def values_at(self, name: str, t: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Values of a piecewise-constant signal at the ticks ``t`` (NaN before its first record).
 
@@ -233,7 +237,8 @@ class Trace:
             Window length [ticks] (> 0), e.g. a controller's slot or servo period.
         start, end : int
             First window's start; the windows cover ``[start, end)`` (default: to the trace's end,
-            or its last pulse if later).
+            or its last pulse if later). The last window is shorter when ``end - start`` is not a
+            whole number of windows: it ends at ``end``.
 
         Returns
         -------
@@ -244,7 +249,7 @@ class Trace:
         times, _ = self.pulses(name)
         last = max(self.end_t, int(times[-1]) + 1 if times.size else 0) if end is None else end
         n = max(-(-(last - start) // window), 0)
-        inside = times[(times >= start) & (times < start + n * window)]
+        inside = times[(times >= start) & (times < min(last, start + n * window))]
         counts = np.bincount((inside - start) // window, minlength=n).astype(np.int64)
         return start + window * np.arange(n, dtype=np.int64), counts
 

@@ -135,3 +135,5 @@ def test_setter_refused_value_names_variable_value_and_range(fmi_version: int) -
         assert "input step_rate = 20000000 Hz is not allowed (allowed: -10000000..10000000 Hz)" in str(info.value)
         with pytest.raises(ConfigurationError, match=r"Float64 variables only; got enable \(Boolean\)"):
             plant.setter(["enable"])
+        with pytest.raises(ConfigurationError, match=r"0 values for 1 variables \(step_rate\)"):
+            plant.setter(["step_rate"])([])

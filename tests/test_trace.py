@@ -68,8 +68,26 @@ def test_pulses_per_window_counts_each_window_whatever_the_direction(sim: Simula
     assert counts.tolist() == [0, 0, 2, 1, 1, 1]
     starts, counts = sim.trace.pulses_per_window("dev.axis1.step", 1000, start=1000, end=2000)
     assert starts.tolist() == [1000] and counts.tolist() == [3]
+    starts, counts = sim.trace.pulses_per_window("dev.axis1.step", 1000, start=1000, end=2300)
+    assert starts.tolist() == [1000, 2000] and counts.tolist() == [3, 1]  # the last window ends at 2300: not 2500
     with pytest.raises(ConfigurationError, match="window"):
         sim.trace.pulses_per_window("dev.axis1.step", 0)
+
+
+def test_materialised_pulses_are_kept_read_only_until_the_train_grows(sim: Simulation) -> None:
+    step = PulseTrain(sim, "dev.x.step")
+    step.emit(0, 1000, 2, 1)
+    t, _ = sim.trace.pulses("dev.x.step")
+    assert sim.trace.pulses("dev.x.step")[0] is t  # kept
+    with pytest.raises(ValueError, match="read-only"):
+        t[0] = 5
+    step.emit(1000, 1000, 1, 0)
+    assert sim.trace.pulses("dev.x.step")[0].tolist() == [0, 500, 1000]  # a new segment: materialised again
+    step.pulse(3000, 1)
+    assert sim.trace.pulses("dev.x.step")[0].tolist() == [0, 500, 1000, 3000]  # a single pulse too
+    kept = sim.trace.pulses("dev.x.step")[0]
+    sim.trace.drop_pulse_cache()
+    assert sim.trace.pulses("dev.x.step")[0] is not kept
 
 
 def test_setting_the_same_value_records_nothing(sim: Simulation) -> None:

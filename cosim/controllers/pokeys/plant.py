@@ -183,7 +183,8 @@ def couple_stepper(sim: Simulation, engine: PulseEngine, axis: int, plant: Stepp
     sign = -1 if engine.config.axes[axis].invert_direction else 1
     name = f"{plant.name}.commanded_steps"
     sim.trace.declare(name, "int", unit="steps",
-                      description=f"{plant.name} commanded_steps, read when pokeys axis {AXES[axis]} changes its rate")
+                      description=f"{plant.name} commanded_steps, read at the coupling and where pokeys axis "
+                                  f"{AXES[axis]} stops")
     sim.trace.record(name, sim.now, _as_int(plant.read("commanded_steps")))
     wakeups = _WAKEUPS.get(engine)
     if wakeups is None:
