@@ -271,12 +271,14 @@ class Trace:
         The arrays are read-only and kept until the train records more pulses, so several checks
         of one train materialise it once.
         """
-        seg = self.segments(name)
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
         ch = self._pulses[name]
         version = (len(ch.t0), len(ch.single_t))
         cached = self._pulse_cache.get(name)
         if cached is not None and cached[0] == version:
             return cached[1], cached[2]
+        seg = self.segments(name)
         t = materialize_pulses(seg["t0"], seg["duration"], seg["count"])
         d = np.repeat(seg["dir"].astype(np.int8), seg["count"])
         if len(ch.single_t):
