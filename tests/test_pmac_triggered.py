@@ -75,11 +75,9 @@ def test_stale_capture_starts_motion_at_the_wrong_master_position(sim: Simulatio
         freeze/arm                     ^^ (same interval)
         start                              ^ wrong: master at ~820, mark 2 at 1500
     """
-    rig, belt = _setup(sim, initial=RUNNING, marks=[500, 1500])
+    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=100_000, dummy_read=False)
     clock = rig.pmac.clock
     k = clock.first_cycle_at_or_after(12_000_000)
-    rigs.freeze_then_arm(sim, rig, [MOVE], t_freeze_ns=clock.t_ns(k) + 1_000, arm_after_ns=100_000, dummy_read=False)
-    rig.pmac.start()
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
     assert start.capture_t_ns == belt.mark_times[0][0]  # the stale capture of mark 1
@@ -93,11 +91,8 @@ def test_stale_capture_starts_motion_at_the_wrong_master_position(sim: Simulatio
 def test_dummy_read_of_capture_register_fixes_the_stale_start(sim: Simulation) -> None:
     """Same timing, plus a dummy read of X:$07800B after freezing: the flag is cleared, the armed
     entry waits for mark 2 and starts there within 1/256 count."""
-    rig, belt = _setup(sim, initial=RUNNING, marks=[500, 1500])
+    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=100_000, dummy_read=True)
     clock = rig.pmac.clock
-    k = clock.first_cycle_at_or_after(12_000_000)
-    rigs.freeze_then_arm(sim, rig, [MOVE], t_freeze_ns=clock.t_ns(k) + 1_000, arm_after_ns=100_000, dummy_read=True)
-    rig.pmac.start()
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
     t_mark2 = belt.mark_times[1][0]
@@ -110,11 +105,7 @@ def test_dummy_read_of_capture_register_fixes_the_stale_start(sim: Simulation) -
 def test_a_servo_cycle_in_frozen_state_also_clears_the_stale_capture(sim: Simulation) -> None:
     """Without the dummy read but with the arm two servo cycles after the freeze, the table reads the
     capture register while frozen and the start is correct (the hazard needs a light load)."""
-    rig, belt = _setup(sim, initial=RUNNING, marks=[500, 1500])
-    clock = rig.pmac.clock
-    k = clock.first_cycle_at_or_after(12_000_000)
-    rigs.freeze_then_arm(sim, rig, [MOVE], t_freeze_ns=clock.t_ns(k) + 1_000, arm_after_ns=1_000_000, dummy_read=False)
-    rig.pmac.start()
+    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=1_000_000, dummy_read=False)
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
     assert start.capture_t_ns == belt.mark_times[1][0]

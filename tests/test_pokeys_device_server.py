@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import socket
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
 import pytest
@@ -58,15 +58,21 @@ def wait_until(condition: object, *, timeout_s: float = 2.0) -> None:
         time.sleep(POLL_S)
 
 
-def stream_v1(client: PoKeysClient, slots: Sequence[tuple[int, ...]]) -> None:
-    client.pe_enable(True)
-    client.pe_set_state(2)
+def send_all(fill: Callable[[Sequence[tuple[int, ...]]], tuple[int, object]],
+             slots: Sequence[tuple[int, ...]]) -> None:
+    """Offer 18 slots per packet until the device has accepted them all (it takes what fits)."""
     sent = 0
     while sent < len(slots):
-        accepted, _ = client.pe_fill(slots[sent:sent + 18])
+        accepted, _ = fill(slots[sent:sent + 18])
         sent += accepted
         if not accepted:
             time.sleep(POLL_S)
+
+
+def stream_v1(client: PoKeysClient, slots: Sequence[tuple[int, ...]]) -> None:
+    client.pe_enable(True)
+    client.pe_set_state(2)
+    send_all(client.pe_fill, slots)
     wait_until(lambda: client.pe_free() == 128)
 
 
@@ -75,12 +81,7 @@ def stream_v2(client: PoKeysClient, slots: Sequence[tuple[int, ...]]) -> None:
     for axis in range(3):
         client.v2_set_axis(axis, AXIS)
     client.v2_set_state(3)
-    sent = 0
-    while sent < len(slots):
-        accepted, _ = client.v2_fill(slots[sent:sent + 18])
-        sent += accepted
-        if not accepted:
-            time.sleep(POLL_S)
+    send_all(client.v2_fill, slots)
     wait_until(lambda: client.v2_status().axis_states[:3] == (1, 1, 1))
 
 

@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from cosim.errors import ConfigurationError
+from cosim.plants.params import from_mapping, require_finite
 
 #: FMU parameters that only steer the FMU's solver.
 _FMU_ONLY = frozenset({"max_step"})
@@ -74,14 +75,8 @@ class ConveyorParameters:
 
     def __post_init__(self) -> None:
         where = "ConveyorParameters"
-        for name in ("tau_drive", "counts_per_metre", "mark_pitch", "mark_length"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigurationError.out_of_range(name, value, "> 0", where=where)
-        for name in ("ripple_amplitude", "ripple_frequency"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ConfigurationError.out_of_range(name, value, ">= 0", where=where)
+        require_finite(self, ("tau_drive", "counts_per_metre", "mark_pitch", "mark_length"), positive=True, where=where)
+        require_finite(self, ("ripple_amplitude", "ripple_frequency"), positive=False, where=where)
         if not self.mark_pitch > self.mark_length:
             raise ConfigurationError.out_of_range("mark_pitch", self.mark_pitch,
                                                   f"> mark_length = {self.mark_length!r}", where=where)
@@ -89,12 +84,7 @@ class ConveyorParameters:
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> ConveyorParameters:
         """From FMU parameter values (e.g. a preset); solver-only parameters are ignored."""
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known - _FMU_ONLY)
-        if unknown:
-            raise ConfigurationError(f"not Conveyor parameters: {', '.join(unknown)} "
-                                     f"(known: {', '.join(sorted(known))})")
-        return cls(**{name: value for name, value in values.items() if name in known})
+        return from_mapping(cls, values, model="Conveyor", solver_only=_FMU_ONLY)
 
     def as_fmu_parameters(self) -> dict[str, float]:
         """The values as FMU start values (``Plant.load(..., parameters=...)``)."""

@@ -26,10 +26,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Any
 
 from cosim.errors import ConfigurationError
+from cosim.plants.params import from_mapping, require_finite
 
 #: FMU parameters that only steer the FMU's solver or start state, not the motor.
 _FMU_ONLY = frozenset({"angle_start", "max_step"})
@@ -79,15 +80,10 @@ class ServoParameters:
 
     def __post_init__(self) -> None:
         where = "ServoParameters"
-        for name in ("resistance", "inductance", "torque_constant", "back_emf_constant", "inertia",
-                     "amplifier_gain", "supply_voltage"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ConfigurationError.out_of_range(name, value, "> 0", where=where)
-        for name in ("viscous_friction", "coulomb_friction"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value >= 0):
-                raise ConfigurationError.out_of_range(name, value, ">= 0", where=where)
+        positive = ("resistance", "inductance", "torque_constant", "back_emf_constant", "inertia",
+                    "amplifier_gain", "supply_voltage")
+        require_finite(self, positive, positive=True, where=where)
+        require_finite(self, ("viscous_friction", "coulomb_friction"), positive=False, where=where)
         if self.counts_per_rev <= 0 or self.counts_per_rev % 4:
             raise ConfigurationError.out_of_range("counts_per_rev", self.counts_per_rev,
                                                   "a positive multiple of 4", where=where)
@@ -101,11 +97,7 @@ class ServoParameters:
         ConfigurationError
             For a name that is not a Servo parameter.
         """
-        known = {f.name for f in fields(cls)}
-        unknown = sorted(set(values) - known - _FMU_ONLY)
-        if unknown:
-            raise ConfigurationError(f"not Servo parameters: {', '.join(unknown)} (known: {', '.join(sorted(known))})")
-        return cls(**{name: value for name, value in values.items() if name in known})
+        return from_mapping(cls, values, model="Servo", solver_only=_FMU_ONLY)
 
     def as_fmu_parameters(self) -> dict[str, float | int]:
         """The values as FMU start values (``Plant.load(..., parameters=...)``)."""

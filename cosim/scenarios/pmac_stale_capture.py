@@ -20,7 +20,9 @@ checks for the correct start.
 from __future__ import annotations
 
 from cosim.checks import ValueAt
-from cosim.controllers.pmac import RUNNING, rigs
+from cosim.controllers.pmac import RUNNING, TriggeredTimeBaseEntry, rigs
+from cosim.controllers.pmac.rigs import Rig
+from cosim.controllers.pmac.testbench import AnalyticConveyor
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -31,24 +33,31 @@ PARAMETERS = (
 UNTIL = "40 ms"
 
 
-def scenario(run: Run) -> None:
+def stale_capture_run(run: Run, *, dummy_read: bool) -> tuple[AnalyticConveyor, Rig[TriggeredTimeBaseEntry], int]:
+    """The set-up and the time-zero error figure (shared with ``pmac_stale_capture_fix``); returns
+    the belt, the rig and the instant of mark 2."""
     sim, p = run.sim, run.p
     belt, rig = rigs.stale_capture(sim, t_freeze_ns=sim.ticks(p.t_freeze_ms, "ms"),
-                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=p.dummy_read)
-
+                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=dummy_read)
     t_mark2 = belt.mark_times[1][0]
-    run.check(ValueAt("pmac.ect.time_zero_pos", None, 500, tol=1 / 256,
-                      name="hazard reproduced: time zero is the stale capture of mark 1"))
-    run.check(ValueAt("pmac.ect.method", t_mark2 - 1, RUNNING, name="hazard reproduced: running before mark 2"))
 
     def time_zero_error() -> float:
         starts = rig.entry.starts
         return float(starts[0].time_zero_pos256 / 256 - belt.position(t_mark2)) if starts else float("nan")
 
+    run.figure("time_zero_error_counts", time_zero_error, "counts")
+    return belt, rig, t_mark2
+
+
+def scenario(run: Run) -> None:
+    belt, rig, t_mark2 = stale_capture_run(run, dummy_read=run.p.dummy_read)
+    run.check(ValueAt("pmac.ect.time_zero_pos", None, 500, tol=1 / 256,
+                      name="hazard reproduced: time zero is the stale capture of mark 1"))
+    run.check(ValueAt("pmac.ect.method", t_mark2 - 1, RUNNING, name="hazard reproduced: running before mark 2"))
+
     def early() -> float:
         starts = rig.entry.starts
         return float(belt.position(starts[0].t_ns) - belt.position(t_mark2)) if starts else float("nan")
 
-    run.figure("time_zero_error_counts", time_zero_error, "counts")
     run.figure("master_at_start_minus_mark2_counts", early, "counts")
     run.figure("saturated_cycles", lambda: len(rig.entry.saturated_cycles))

@@ -17,22 +17,16 @@ armed just before mark 2 and runs within one servo period after it.
 from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, ValueAt
-from cosim.controllers.pmac import ARMED, RUNNING, rigs
-from cosim.scenario import Param, Run
+from cosim.controllers.pmac import ARMED, RUNNING
+from cosim.scenario import Run
+from cosim.scenarios import pmac_stale_capture
 
-PARAMETERS = (
-    Param("t_freeze_ms", 12.0, "ms", (9.0, 20.0), "when the motion program freezes the entry"),
-    Param("arm_after_us", 100, "us", (1, 5000), "PLC arms this long after the freeze"),
-)
+PARAMETERS = tuple(p for p in pmac_stale_capture.PARAMETERS if p.name != "dummy_read")
 UNTIL = "40 ms"
 
 
 def scenario(run: Run) -> None:
-    sim, p = run.sim, run.p
-    belt, rig = rigs.stale_capture(sim, t_freeze_ns=sim.ticks(p.t_freeze_ms, "ms"),
-                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=True)
-
-    t_mark2 = belt.mark_times[1][0]
+    belt, rig, t_mark2 = pmac_stale_capture.stale_capture_run(run, dummy_read=True)
     period = int(-(-rig.pmac.clock.period_ns // 1))
     run.check(ValueAt("pmac.ect.time_zero_pos", None, float(belt.position(t_mark2)), tol=1 / 256,
                       name="time zero = master position at mark 2 (1/256 count)"))
@@ -40,8 +34,3 @@ def scenario(run: Run) -> None:
     run.check(Duration(EdgeRef("conveyor.mark", 1, which="last"), EdgeRef("pmac.ect.method", RUNNING), max=period,
                        name="running within one servo period of mark 2"))
 
-    def time_zero_error() -> float:
-        starts = rig.entry.starts
-        return float(starts[0].time_zero_pos256 / 256 - belt.position(t_mark2)) if starts else float("nan")
-
-    run.figure("time_zero_error_counts", time_zero_error, "counts")

@@ -9,17 +9,14 @@ Checks: no underrun, and every pulse of the move is emitted.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from cosim.checks import IntervalsAbove, ValueAt
-from cosim.scenario import Param, Run
+from cosim.scenario import Run
+from cosim.scenarios import pokeys_stall
 from cosim.scenarios.pokeys_stall import stalled_job
 
-PARAMETERS = (
-    Param("prefill", 100, "slots", (1, 128), "slots queued before the start, and the level the host keeps"),
-    Param("stall_at_ms", 300, "ms", (0, 10_000), "when the host stalls"),
-    Param("stall_ms", 60, "ms", (1, 10_000), "how long the host stalls"),
-    Param("link", "usb", "", ("usb", "ethernet"), "host link profile"),
-    Param("distance", 15_000, "pulses", (1, 1_000_000), "x travel of the move"),
-)
+PARAMETERS = tuple(replace(p, default=100) if p.name == "prefill" else p for p in pokeys_stall.PARAMETERS)
 UNTIL = "1.5 s"
 
 
