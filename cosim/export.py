@@ -1,5 +1,9 @@
 """Exports of a :class:`~cosim.trace.Trace`: VCD for waveform viewers, Parquet/CSV tables.
 
+:func:`write_trace` writes a trace into a folder (``trace_meta.json``, ``trace.vcd`` and the
+tables); :func:`read_trace` reads the tables back into a :class:`~cosim.trace.Trace`. Both use
+only the trace's public methods.
+
 Tables (one file each, in the trace folder, ``.parquet`` or ``.csv``):
 
 ``edges``     signal, t, value (int64)       bit and int signals: every change
@@ -13,16 +17,43 @@ signal's kind, unit and description. In the VCD each pulse is drawn ``pulse_widt
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
-if TYPE_CHECKING:
-    from cosim.trace import Trace
+from cosim.errors import ConfigurationError
+from cosim.trace import Trace
 
 _TABLES = ("edges", "values", "segments", "pulses")
+FORMATS = ("vcd", "parquet", "csv")
+META = "trace_meta.json"
+
+
+def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:
+    """Write ``trace`` into ``folder``: ``trace_meta.json`` and the given formats (vcd, parquet, csv)."""
+    for fmt in formats:
+        if fmt not in FORMATS:
+            raise ConfigurationError.out_of_range("trace format", fmt, ", ".join(FORMATS))
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / META).write_text(json.dumps(trace.header(), indent=1, default=str))
+    for fmt in formats:
+        if fmt == "vcd":
+            write_vcd(trace, folder / "trace.vcd")
+        else:
+            write_tables(trace, folder, fmt)
+    return folder
+
+
+def read_trace(folder: str | Path) -> Trace:
+    """Read a trace written by :func:`write_trace` (Parquet or CSV tables) back."""
+    folder = Path(folder)
+    trace = Trace.from_header(json.loads((folder / META).read_text()))
+    read_tables(trace, folder)
+    return trace
 
 
 def write_vcd(trace: Trace, path: str | Path) -> Path:
@@ -76,13 +107,10 @@ def _frames(trace: Trace) -> dict[str, pd.DataFrame]:
         if info.kind == "pulse":
             seg = trace.segments(name)
             parts["segments"].append(pd.DataFrame({"signal": name, **seg}))
-            ch = trace._pulses[name]
-            if len(ch.single_t):
-                parts["pulses"].append(pd.DataFrame({
-                    "signal": name,
-                    "t": np.frombuffer(ch.single_t, dtype=np.int64),
-                    "dir": np.frombuffer(ch.single_dir, dtype=np.int8).astype(np.int64),
-                }))
+            t_single, dir_single = trace.single_pulses(name)
+            if t_single.size:
+                parts["pulses"].append(pd.DataFrame({"signal": name, "t": t_single,
+                                                     "dir": dir_single.astype(np.int64)}))
         else:
             t, v = trace.edges(name)
             table = "values" if info.kind == "real" else "edges"
@@ -134,18 +162,10 @@ def read_tables(trace: Trace, folder: str | Path) -> None:
         return pd.read_parquet(path) if fmt == "parquet" else pd.read_csv(path)
 
     for table in ("edges", "values"):
-        frame = read(table)
-        for name, group in frame.groupby("signal", sort=False):
-            channel = trace._values[str(name)]
-            channel.t.extend(group["t"].to_numpy(np.int64).tolist())
-            channel.v.extend(group["value"].to_numpy(np.float64).tolist())
+        for name, group in read(table).groupby("signal", sort=False):
+            trace.extend(str(name), group["t"].to_numpy(np.int64), group["value"].to_numpy(np.float64))
     for name, group in read("segments").groupby("signal", sort=False):
-        ch = trace._pulses[str(name)]
-        ch.t0.extend(group["t0"].to_numpy(np.int64).tolist())
-        ch.duration.extend(group["duration"].to_numpy(np.int64).tolist())
-        ch.count.extend(group["count"].to_numpy(np.int64).tolist())
-        ch.direction.extend(group["dir"].to_numpy(np.int64).tolist())
+        trace.extend_segments(str(name), group["t0"].to_numpy(np.int64), group["duration"].to_numpy(np.int64),
+                              group["count"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))
     for name, group in read("pulses").groupby("signal", sort=False):
-        ch = trace._pulses[str(name)]
-        ch.single_t.extend(group["t"].to_numpy(np.int64).tolist())
-        ch.single_dir.extend(group["dir"].to_numpy(np.int64).tolist())
+        trace.extend_single_pulses(str(name), group["t"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))

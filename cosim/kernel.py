@@ -14,7 +14,6 @@ the kernel runs that event first.
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
-from pathlib import Path
 from typing import Any
 
 import simpy
@@ -40,11 +39,11 @@ class _Environment(simpy.Environment):
         self._steps += 1
         if self.on_progress is not None and not self._steps & 0xFFF:
             self.on_progress(int(self._now))
-        if self.look_aheads and self._queue:
-            t_next = int(self._queue[0][0])
-            if t_next > self._now:
+        if self.look_aheads:
+            t_next = self.peek()
+            if self._now < t_next < float("inf"):
                 for look_ahead in self.look_aheads:
-                    look_ahead(t_next)
+                    look_ahead(int(t_next))
         super().step()
 
 
@@ -119,14 +118,22 @@ class Simulation:
         event.callbacks.append(lambda _event: callback())
         return event
 
+    def due_by(self, t: int) -> bool:
+        """Is any event queued at or before tick ``t``? (SimPy's public ``peek``.)
+
+        A run's ``until`` is a queued event too, so a loop that asks before each pass never runs
+        past the end of the run.
+        """
+        return self.env.peek() <= t
+
     def skip_to(self, t: int) -> bool:
         """Move the clock to tick ``t`` at once if nothing else can happen before it; else do nothing.
 
         For a process that runs at many instants in a row (a controller's slot loop): instead of
         yielding one event per instant it may call its next pass directly when this returns True.
-        That holds when no look-ahead is registered (no plant could announce an event) and the
-        earliest queued event is strictly after ``t``, so the run is the same as with an event at
-        ``t``, at a fraction of the cost. A run's ``until`` is a queued event: never skipped past.
+        That holds when no look-ahead is registered (no plant could announce an event) and no event
+        is due at or before ``t`` (:meth:`due_by`), so the run is the same as with an event at
+        ``t``, at a fraction of the cost.
 
         Call it only from a process resumed by an event of its own (an ``At`` that nothing else
         waits on): other callbacks of a shared event would run after the jump and see the later
@@ -138,10 +145,9 @@ class Simulation:
             True if the clock now reads ``t``.
         """
         env = self.env
-        queue = env._queue  # SimPy's heap of (time, priority, id, event)
-        if env.look_aheads or t < env._now or (queue and queue[0][0] <= t):
+        if env.look_aheads or t < env.now or self.due_by(t):
             return False
-        env._now = t
+        env._now = t  # SimPy has no public setter; nothing is due before t, so no event is skipped
         return True
 
     def process(self, generator: Generator[Event, Any, Any]) -> simpy.Process:
@@ -156,23 +162,17 @@ class Simulation:
         """Register a teardown action (closing FMUs), run by :meth:`close` in reverse order."""
         self._closers.append(closer)
 
-    def run(self, until: int, *, out: str | Path | None = None) -> None:
-        """Run until tick ``until``; with ``out``, write the trace there even if the run fails.
+    def run(self, until: int) -> None:
+        """Run until tick ``until`` (exclusive for events scheduled exactly then).
 
-        Parameters
-        ----------
-        until : int
-            End time in ticks (exclusive for events scheduled exactly then).
-        out : path, optional
-            Folder to write the trace exports to (also on failure: nothing recorded is lost).
+        The trace's end is set to the instant reached, also when a process fails, so whoever
+        writes the trace afterwards (the runner) keeps everything recorded up to that instant.
         """
         self.timebase.check_ticks(until, name="until")
         try:
             self.env.run(until=until)
         finally:
             self.trace.end_t = self.now
-            if out is not None:
-                self.trace.write(out)
 
     def close(self) -> None:
         """Tear down everything registered with :meth:`on_close`."""

@@ -156,14 +156,13 @@ class Plant:
         read = self.fmu.reader(list(mapping))
         names = list(mapping.values())
         record = self.sim.trace.record
-        env, fmu = self.sim.env, self.fmu
+        sim, env, fmu = self.sim, self.sim.env, self.fmu
 
         def sample() -> object:
             # The hot loop of sampled runs. While nothing else is due before the next sample (no
             # queued event at or before it, no look-ahead and no watched output that could make
             # one), samples are taken in a row without a kernel event each: same instants, same
             # values, a fraction of the cost.
-            queue = env._queue
             k = 0
             while True:
                 t = t0 + k * period
@@ -175,7 +174,7 @@ class Plant:
                         record(trace_name, t, float(value))
                     k += 1
                     t = t0 + k * period
-                    if env.look_aheads or self._watched or (queue and queue[0][0] <= t):
+                    if env.look_aheads or self._watched or sim.due_by(t):
                         break
                     self._advance_to(t)
 

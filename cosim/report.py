@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from cosim.export import read_trace
 from cosim.runner import Result
 from cosim.trace import Trace
 
@@ -156,7 +157,7 @@ def write_report(results: list[Result], out: Path) -> Path:
             parts.append("<ul>" + "".join(f"<li>{html.escape(k)} = {v['value']:.6g} {html.escape(v['unit'])}</li>"
                                           for k, v in r.figures.items()) + "</ul>")
         if r.out is not None and (r.out / "trace_meta.json").exists():
-            for title, png in _plots(Trace.load(r.out)):
+            for title, png in _plots(read_trace(r.out)):
                 parts.append(f"<img alt='{html.escape(title)}' src='data:image/png;base64,{png}'>")
     parts.append("</body></html>")
     path = out / "report.html"

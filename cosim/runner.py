@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
+from cosim.export import write_trace
 from cosim.kernel import Simulation
 from cosim.scenario import Run, ScenarioFile, Values, where
 
@@ -170,7 +171,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             _evaluate(run, result, scenario)
         if out is not None:
             folder = Path(out)
-            sim.trace.write(folder, formats=formats)
+            write_trace(sim.trace, folder, formats=formats)
             (folder / "result.json").write_text(to_json(result.to_dict()))
             result.out = folder
     return result

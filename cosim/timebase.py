@@ -11,11 +11,13 @@ Events at the same tick run in the order of their :class:`Priority`, then in the
 were scheduled. SimPy's own follow-on events (a process resuming after an event it waited for)
 use ``URGENT`` / ``NORMAL`` and therefore run before the next named stage at that tick::
 
-    URGENT(0) < NORMAL(1) < PLANT_EVENT < SERVO < SLOT < HOST < SAMPLE
+    URGENT(0) < NORMAL(1) < PLANT_EVENT < SERVO < SLOT_WATCH < SLOT < HOST < SETTLE < SAMPLE
 
 so at one instant: plant events (a switch crossing found inside an FMU) are published first,
-then the servo interrupt, then the pulse-engine slot, then the host application, and sampling
-for the record comes last, after everything that instant changed.
+then the servo interrupt, then observers that look at a pulse engine just before its slot, the
+slot itself, then the host application; outputs that may be switched several times at one
+instant settle to their final level after that, and sampling for the record comes last, after
+everything that instant changed.
 """
 
 from __future__ import annotations
@@ -48,8 +50,10 @@ class Priority(IntEnum):
     NORMAL = 1  # SimPy: follow-on events (a process resuming)
     PLANT_EVENT = 2  # an event announced by a plant (switch crossing, registration mark)
     SERVO = 10  # servo interrupt of a motion controller
+    SLOT_WATCH = 19  # an observer of a pulse engine, just before its slot (buffer level about to be read)
     SLOT = 20  # pulse-engine time slot
     HOST = 30  # host application (refill loop, program interpreter)
+    SETTLE = 39  # outputs switched several times at one instant commit their final level
     SAMPLE = 40  # recording samples of analog outputs
 
 

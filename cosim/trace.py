@@ -15,20 +15,19 @@ Kinds of record (all times are integer ticks of the trace's resolution):
 * ``pulse`` trains: segments ``(t0, duration, count, dir)`` placed by the rule of
   :mod:`cosim.pulses`, plus any pulses given one by one; :meth:`Trace.pulses` materialises them.
 
-Exports: :meth:`Trace.write` puts ``trace.vcd``, ``trace_meta.json`` and Parquet (or CSV)
-tables into a folder; :meth:`Trace.load` reads the tables back.
+The trace is a leaf: it imports nothing of cosim but the pulse rule, the time base and the
+errors. Exports (:mod:`cosim.export`: VCD, Parquet/CSV, the ``trace_meta.json`` header) read and
+fill it through its public methods only.
 """
 
 from __future__ import annotations
 
-import json
 import re
 from array import array
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field
 from fractions import Fraction
-from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -291,49 +290,60 @@ class Trace:
         self._pulse_cache[name] = (version, t, d)
         return t, d
 
-    # -- export -----------------------------------------------------------------------------
-    def write(self, out: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:
-        """Write the trace into folder ``out`` in the given formats (``vcd``, ``parquet``, ``csv``)."""
-        from cosim import export
+    def single_pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
+        """``(t, dir)`` of the pulses of a pulse train that were recorded one by one (not as segments)."""
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
+        ch = self._pulses[name]
+        return np.frombuffer(ch.single_t, dtype=np.int64).copy(), np.frombuffer(ch.single_dir, dtype=np.int8).copy()
 
-        folder = Path(out)
-        folder.mkdir(parents=True, exist_ok=True)
-        self._write_meta(folder / "trace_meta.json")
-        for fmt in formats:
-            if fmt == "vcd":
-                export.write_vcd(self, folder / "trace.vcd")
-            elif fmt in ("parquet", "csv"):
-                export.write_tables(self, folder, fmt)
-            else:
-                raise ConfigurationError.out_of_range("trace format", fmt, "vcd, parquet, csv")
-        return folder
-
-    def _write_meta(self, path: Path) -> None:
+    # -- header and bulk filling (for readers of stored traces) --------------------------------
+    def header(self) -> dict[str, Any]:
+        """Resolution, end, declared signals and metadata as plain data (``trace_meta.json``)."""
         res = self.timebase.resolution_s
-        meta = {
+        return {
             "resolution_s": [res.numerator, res.denominator],
             "end_t": self.end_t,
             "signals": {n: asdict(i) for n, i in self.info.items()},
             "meta": self.meta,
         }
-        path.write_text(json.dumps(meta, indent=1, default=str))
 
     @classmethod
-    def load(cls, folder: str | Path) -> Trace:
-        """Read a trace written by :meth:`write` (Parquet or CSV tables) back."""
-        from cosim import export
-
-        folder = Path(folder)
-        meta = json.loads((folder / "trace_meta.json").read_text())
-        num, den = meta["resolution_s"]
+    def from_header(cls, header: Mapping[str, Any]) -> Trace:
+        """An empty trace with the resolution, end, signals and metadata of :meth:`header`."""
+        num, den = header["resolution_s"]
         trace = cls(TimeBase(Fraction(num, den)))
-        trace.end_t = int(meta["end_t"])
-        trace.meta = dict(meta.get("meta", {}))
-        for name, info in meta["signals"].items():
+        trace.end_t = int(header["end_t"])
+        trace.meta = dict(header.get("meta", {}))
+        for name, info in header["signals"].items():
             trace.declare(name, info["kind"], unit=info["unit"], description=info["description"],
                           pulse_width=info["pulse_width"])
-        export.read_tables(trace, folder)
         return trace
+
+    def extend(self, name: str, t: npt.ArrayLike, value: npt.ArrayLike) -> None:
+        """Append many records ``(t, value)`` of a bit/int/real signal at once (in time order)."""
+        channel = self._channel(name)
+        channel.t.extend(np.asarray(t, dtype=np.int64).tolist())
+        channel.v.extend(np.asarray(value, dtype=np.float64).tolist())
+
+    def extend_segments(self, name: str, t0: npt.ArrayLike, duration: npt.ArrayLike, count: npt.ArrayLike,
+                        direction: npt.ArrayLike) -> None:
+        """Append many segments of a pulse train at once (see :meth:`record_segment`)."""
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
+        ch = self._pulses[name]
+        ch.t0.extend(np.asarray(t0, dtype=np.int64).tolist())
+        ch.duration.extend(np.asarray(duration, dtype=np.int64).tolist())
+        ch.count.extend(np.asarray(count, dtype=np.int64).tolist())
+        ch.direction.extend(np.asarray(direction, dtype=np.int64).tolist())
+
+    def extend_single_pulses(self, name: str, t: npt.ArrayLike, direction: npt.ArrayLike) -> None:
+        """Append many pulses given one by one (see :meth:`record_pulse`)."""
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
+        ch = self._pulses[name]
+        ch.single_t.extend(np.asarray(t, dtype=np.int64).tolist())
+        ch.single_dir.extend(np.asarray(direction, dtype=np.int64).tolist())
 
 
 def _unknown(name: str, known: dict[str, SignalInfo]) -> str:

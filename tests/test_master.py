@@ -16,11 +16,11 @@ import pytest
 
 from cosim.controllers.scripted import play
 from cosim.errors import ConfigurationError, FmuError
+from cosim.export import read_trace, write_trace
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.plants.laser import pwm_energy
 from cosim.signals import Signal
-from cosim.trace import Trace
 
 pytestmark = pytest.mark.fmu
 
@@ -99,9 +99,12 @@ def test_fmu_error_mid_run_raises_with_its_message_and_keeps_the_trace(tmp_path:
     laser.drive("pwm_period", period, convert=int)
     play(sim, [(1 * MS, {period: 500}), (2 * MS, {period: -3})])
     with pytest.raises(FmuError) as info:
-        sim.run(until=5 * MS, out=tmp_path / "out")
+        try:
+            sim.run(until=5 * MS)
+        finally:
+            write_trace(sim.trace, tmp_path / "out")
     assert "input pwm_period = -3 is not allowed (allowed: >= 0)" in str(info.value)
-    trace = Trace.load(tmp_path / "out")
+    trace = read_trace(tmp_path / "out")
     t, v = trace.edges("ctl.laser.pwm_period")
     assert t.tolist() == [0, 1 * MS, 2 * MS] and v.tolist() == [1000, 500, -3]
 

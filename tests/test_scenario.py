@@ -141,9 +141,9 @@ def test_failure_mid_run_keeps_the_trace(tmp_path: Path) -> None:
     path = _script(tmp_path, text)
     result = run_scenario(load(path), out=tmp_path / "out")
     assert result.verdict == "ERROR" and "ZeroDivisionError" in (result.error or "")
-    from cosim.trace import Trace
+    from cosim.export import read_trace
 
-    back = Trace.load(tmp_path / "out")
+    back = read_trace(tmp_path / "out")
     assert back.edges("blink.gate")[0].tolist() == [0, 0, 100_000, 500_000, 600_000]
 
 

@@ -9,9 +9,9 @@ import pytest
 import vcdvcd
 
 from cosim.errors import ConfigurationError
+from cosim.export import read_trace, write_trace
 from cosim.kernel import Simulation
 from cosim.signals import PulseTrain, Signal
-from cosim.trace import Trace
 
 
 def _scenario(sim: Simulation) -> None:
@@ -108,8 +108,8 @@ def test_bad_names_and_unknown_signals(sim: Simulation) -> None:
 @pytest.mark.parametrize("fmt", ["parquet", "csv"])
 def test_tables_round_trip(sim: Simulation, tmp_path: Path, fmt: str) -> None:
     _scenario(sim)
-    sim.trace.write(tmp_path, formats=(fmt,))
-    back = Trace.load(tmp_path)
+    write_trace(sim.trace, tmp_path, formats=(fmt,))
+    back = read_trace(tmp_path)
     for name in sim.trace.names():
         if sim.trace.info[name].kind == "pulse":
             for a, b in zip(back.pulses(name), sim.trace.pulses(name), strict=True):
@@ -122,7 +122,7 @@ def test_tables_round_trip(sim: Simulation, tmp_path: Path, fmt: str) -> None:
 
 def test_vcd_reads_back_with_an_independent_parser(sim: Simulation, tmp_path: Path) -> None:
     _scenario(sim)
-    sim.trace.write(tmp_path, formats=("vcd",))
+    write_trace(sim.trace, tmp_path, formats=("vcd",))
     vcd = vcdvcd.VCDVCD(str(tmp_path / "trace.vcd"))
     assert vcd.timescale["unit"] == "ns" and vcd.timescale["magnitude"] == 1
     gate = vcd["dev.axis1.gate"]
@@ -142,6 +142,6 @@ def test_same_scenario_twice_gives_bit_identical_exports(tmp_path: Path) -> None
     for run in range(2):
         with Simulation(seed=3) as sim:
             _scenario(sim)
-            out = sim.trace.write(tmp_path / str(run), formats=("vcd", "csv"))
+            out = write_trace(sim.trace, tmp_path / str(run), formats=("vcd", "csv"))
         digests.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
     assert digests[0] == digests[1]

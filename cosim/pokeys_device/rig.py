@@ -23,6 +23,7 @@ from typing import Any
 
 from cosim.checks import CheckResult, DirectionSetup, MinPulseSpacing, PulsesPerWindow
 from cosim.controllers.pokeys import AXES, MAX_PULSES_PER_SLOT, SLOT_NS, EngineConfig, EngineState, PulseEngine
+from cosim.export import write_trace
 from cosim.kernel import At, Simulation
 from cosim.pokeys_device.adapter import PulseEngineAdapter
 from cosim.pokeys_device.device import Device
@@ -177,6 +178,6 @@ class VirtualPoKeys:
         self.results = self.checks()
         summary = self.summary()
         if out is not None:
-            folder = self.sim.trace.write(out, formats=formats)
+            folder = write_trace(self.sim.trace, out, formats=formats)
             (folder / "device.json").write_text(json.dumps(summary, indent=1))
         return summary

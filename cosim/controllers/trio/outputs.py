@@ -3,7 +3,7 @@
 A program may switch an output several times at one instant (the note's example switches the
 PWM on, then gating on, at t = 0). The hardware shows only the final level, so the outputs that
 drive the laser (``gate``, ``pwm_cycle``, ``pwm_mark``, ``wdog``) are *settled*: a change is
-committed once per instant, at priority :data:`SETTLE` (after the servo cycle and the host
+committed once per instant, at priority ``Priority.SETTLE`` (after the servo cycle and the host
 program, before recording samples). The trace and the plant see one value per instant, at the
 exact tick.
 """
@@ -17,10 +17,6 @@ from cosim.timebase import Priority
 
 if TYPE_CHECKING:
     from cosim.kernel import Simulation
-
-#: Same-instant priority at which settled outputs are committed (just before SAMPLE).
-SETTLE = int(Priority.SAMPLE) - 1
-
 
 class SettledSignal:
     """A :class:`~cosim.signals.Signal` whose changes are committed at the end of the instant.
@@ -53,7 +49,7 @@ class SettledSignal:
         self._wanted = value
         if self._pending_t != self.sim.now and value != self.signal.value:
             self._pending_t = self.sim.now
-            self.sim.call_at(self.sim.now, SETTLE, self._commit)
+            self.sim.call_at(self.sim.now, Priority.SETTLE, self._commit)
 
     def _commit(self) -> None:
         self._pending_t = None
