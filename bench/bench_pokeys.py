@@ -3,7 +3,7 @@
 The same job runs in one process: through :class:`PulseEngine` (one pulse-train segment per slot
 and axis) alone, through it with three Stepper FMUs (NEMA 17 preset with its L/R current loop,
 FMI 3.0, ``max_step`` 100 us so that the FMU's own bounds set its steps) coupled by
-:func:`~cosim.controllers.pokeys.plant.couple_stepper`, and through :class:`NaivePulseEngine` (one
+:func:`~cosim.couplings.stepper.couple_stepper`, and through :class:`NaivePulseEngine` (one
 SimPy event per pulse). All are fed by the host model over the USB link. Then every pulse of the
 segment run is checked (at most 25 per slot, spacing, direction set-up) and the steppers'
 ``commanded_steps`` are compared with the engine counters. Printed: wall time per part (engine,
@@ -25,7 +25,7 @@ from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, u
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.naive import NaivePulseEngine
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
-from cosim.controllers.pokeys.plant import couple_stepper
+from cosim.couplings.stepper import couple_stepper
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.presets import load_preset
@@ -52,8 +52,12 @@ MAX_STEP_S = 1e-4  # the FMU's solver: its own bounds (natural period / 50, 0.25
 class StandIn:
     """A plant that takes every input and does nothing: measures the coupling's own cost."""
 
-    def __init__(self, name: str) -> None:
+    def __init__(self, sim: Simulation, name: str) -> None:
+        self.sim = sim
         self.name = name
+
+    def variable_names(self) -> list[str]:
+        return ["step_rate", "step_phase", "commanded_steps"]
 
     def set(self, values: Mapping[str, float]) -> None:
         pass
@@ -64,7 +68,7 @@ class StandIn:
     def read(self, variable: str) -> object:
         return 0
 
-    def watch(self, variable: str) -> Signal:
+    def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
         raise NotImplementedError
 
 
@@ -79,13 +83,13 @@ def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig
     plants = []
     if stand_ins:
         for i, a in enumerate(AXES):
-            couple_stepper(sim, engine, i, StandIn(f"stand_in_{a}"))
+            couple_stepper(engine.step_dir(i), StandIn(sim, f"stand_in_{a}"))
     if steppers:
         preset = {**load_preset("nema17_17hs16_2004s1"), "max_step": max_step_s,
                   **(IDEAL_DRIVER if ideal_driver else {})}
         plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", parameters=preset) for a in AXES]
         for i, plant in enumerate(plants):
-            couple_stepper(sim, engine, i, plant)
+            couple_stepper(engine.step_dir(i), plant)
     until = (len(entries) + 200) * SLOT_NS
     started = time.perf_counter()
     sim.run(until=until)

@@ -12,12 +12,17 @@ A :class:`Plant` is advanced (one ``doStep`` from its own time to now) only
 
 Never on a fixed grid unless a scenario asks for sampling, so results do not depend on how many
 samples are requested (beyond the FMU's own solver tolerance).
+
+:class:`PlantLike` is the one plant protocol: what couplings (:mod:`cosim.couplings`) and
+scenarios use of a plant. :class:`Plant` (an FMU) and the analytic plants of
+:mod:`cosim.plants.analytic` implement it; a test double may too.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import Protocol
 
 from cosim.errors import ConfigurationError
 from cosim.fmu import Fmu, Value
@@ -26,8 +31,43 @@ from cosim.signals import Signal
 from cosim.timebase import Priority
 
 
+class PlantLike(Protocol):
+    """What every plant offers the couplings: variables by name, read, set, driven and watched.
+
+    Reading an output or setting an input brings the plant to the simulation's current time
+    first; a watched output becomes a signal that changes at the plant's own events.
+    """
+
+    name: str
+    sim: Simulation
+
+    def variable_names(self) -> list[str]:
+        """Every variable of the plant (inputs, outputs, parameters)."""
+        ...
+
+    def read(self, variable: str) -> Value:
+        """Value of a variable now."""
+        ...
+
+    def set(self, values: Mapping[str, Value]) -> None:
+        """Set inputs now."""
+        ...
+
+    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
+        """A function setting these real inputs now, prepared once (for couplings' hot paths)."""
+        ...
+
+    def drive(self, variable: str, signal: Signal, *, convert: Callable[[float], Value] | None = None) -> None:
+        """Let ``signal`` drive input ``variable`` from now on."""
+        ...
+
+    def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
+        """Publish an output as a signal that changes at the plant's own events."""
+        ...
+
+
 class Plant:
-    """An FMU inside a :class:`~cosim.kernel.Simulation`.
+    """An FMU inside a :class:`~cosim.kernel.Simulation` (a :class:`PlantLike`).
 
     Parameters
     ----------
@@ -71,6 +111,10 @@ class Plant:
             path = ensure_fmu(str(model), fmi_version)
         fmu = Fmu(path, timebase=sim.timebase, instance_name=name, parameters=parameters, start=sim.now)
         return cls(sim, fmu, name=name)
+
+    def variable_names(self) -> list[str]:
+        """Every variable of the FMU that the adapter can read or set."""
+        return list(self.fmu.variables)
 
     # -- time -------------------------------------------------------------------------------
     def advance(self) -> None:

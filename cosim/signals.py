@@ -4,11 +4,19 @@ A :class:`Signal` has a current value; setting a new value records an edge in th
 current tick and tells every subscriber (the master uses this to advance an FMU to now and set
 its input). A :class:`PulseTrain` carries step pulses as segments (see :mod:`cosim.pulses`).
 Controllers only know signals, never FMUs: any plant or a test double can stand behind them.
+
+*Ports* are the named bundles of signals at a controller's connectors that a coupling
+(:mod:`cosim.couplings`) joins to a plant: :class:`StepDirPort` (step and direction outputs),
+:class:`PwmPort` (a laser's modulation and enables), :class:`SwitchPort` (limit and home inputs).
+A controller offers them (``engine.step_dir(0)``, ``trio.pwm_port(3)``); it never names the
+plant variables they end up on.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
+from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.errors import ConfigurationError
@@ -140,3 +148,60 @@ class PulseTrain:
         self.position += 1 if direction else -1
         for listener in self._listeners:
             listener(self, t, 1, 1, direction)
+
+
+# -- ports: the signal bundles at a controller's connectors -----------------------------------------
+@dataclass(frozen=True)
+class StepDirPort:
+    """A step/direction output as a driver sees it.
+
+    Parameters
+    ----------
+    step : PulseTrain
+        Step pulses; a segment's ``direction`` is the direction the controller counts (1 = up).
+    direction : Signal
+        The direction pin.
+    reversed : bool
+        True when the pin is inverted relative to the count (a PoKeys axis with
+        ``invert_direction``): the motor then turns opposite to the counted direction.
+    """
+
+    step: PulseTrain
+    direction: Signal
+    reversed: bool = False
+
+
+@dataclass(frozen=True)
+class PwmPort:
+    """The outputs that modulate a laser.
+
+    Parameters
+    ----------
+    enable : Signal
+        Drive enable (bit; the Trio WDOG).
+    gate : Signal
+        Gate (bit): the output may be on.
+    period_clocks, mark_clocks : Signal
+        Carrier period and on-time [clocks of ``clock_hz``] (int).
+    phase_clocks : Signal
+        Clock count at which the carrier's periods start (int).
+    clock_hz : Fraction
+        The PWM base clock [Hz].
+    """
+
+    enable: Signal
+    gate: Signal
+    period_clocks: Signal
+    mark_clocks: Signal
+    phase_clocks: Signal
+    clock_hz: Fraction
+
+
+@dataclass(frozen=True)
+class SwitchPort:
+    """Switch inputs of one axis (bits, 1 = tripped); ``None`` where the axis has no such input."""
+
+    limit_pos: Signal | None = None
+    limit_neg: Signal | None = None
+    home: Signal | None = None
+

@@ -24,6 +24,7 @@ from pathlib import Path
 import control
 import numpy as np
 import pytest
+from encoder_oracle import one_over_t_position
 from fmpy import simulate_fmu
 from fmpy.build import build_platform_binary
 from fmpy.validation import validate_fmu
@@ -36,7 +37,6 @@ from cosim.fmubuild import SOURCE_DIR, ensure_fmu
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.plants.conveyor import ConveyorParameters, linear_model, mark_edge_times, position_at
-from cosim.plants.servo import one_over_t_position
 from cosim.presets import load_preset
 
 pytestmark = pytest.mark.fmu

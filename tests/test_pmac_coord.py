@@ -8,15 +8,16 @@ from fractions import Fraction
 from typing import Any
 
 import pytest
+from cycle_probe import record_each_cycle
 
-from cosim.controllers.pmac import rigs
+from cosim import rigs
 from cosim.controllers.pmac.ect import pmac_default_table
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove, compile_items
-from cosim.controllers.pmac.testbench import AnalyticConveyor, record_each_cycle
 from cosim.controllers.pmac.units import I10_DEFAULT, IX94_DEFAULT, IX94_MAX
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.plants.analytic import IdealConveyor
 from cosim.timebase import Priority
 
 MOVE = LinearMove(100_000, 64_000, 10)  # 64 units/ms with TA 10 ms: longer than every run below
@@ -35,7 +36,7 @@ def test_ix94_at_max_with_smoothly_varying_master_gives_no_slip(sim: Simulation)
         Ix94 active    ___________   (never)
         slip           0 0 0 0 0 0
     """
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=32,
+    belt = IdealConveyor(sim, speed_counts_per_ms=32,
                             phases=[(20_000_000, Fraction(16, 5)), (20_000_000, Fraction(-14, 5))])
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=IX94_MAX)
     clock = rig.pmac.clock
@@ -63,7 +64,7 @@ def test_ix94_low_during_fast_master_acceleration_reports_slip(sim: Simulation) 
         Ix94 act  __|‾‾‾‾|__________     cycles 2..219 (cycle 1 initialises actual = source)
         slip      0 ↗ 3.1k counts, then constant
     """
-    belt = AnalyticConveyor(sim, phases=[(5_000_000, Fraction(64, 5))])
+    belt = IdealConveyor(sim, phases=[(5_000_000, Fraction(64, 5))])
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=16_384)
     clock = rig.pmac.clock
     rig.cs.run_program([MOVE])
@@ -126,7 +127,7 @@ def test_host_percent_slews_at_ix94_per_cycle(sim: Simulation) -> None:
 
 
 def test_percent_register_is_ignored_under_external_time_base(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=48)
+    belt = IdealConveyor(sim, speed_counts_per_ms=48)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, i10=2**21)
     rig.pmac.command_percent(1, 10)
     rig.pmac.start()
@@ -191,7 +192,7 @@ def test_time_base_overrun_carries_into_the_next_segment(sim: Simulation) -> Non
 
 
 def test_dwell_under_external_time_base_is_reported(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048)
     rig.cs.run_program([Dwell(1), MOVE])
     rig.pmac.start()
@@ -222,7 +223,7 @@ def test_bad_ix94(sim: Simulation, ix94: object) -> None:
 
 def test_ix93_1833_selects_the_default_pmac_table_time_base(sim: Simulation) -> None:
     """The manual's example: default (non-Turbo) table, time-base result at $0729, I193=1833."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=48)
+    belt = IdealConveyor(sim, speed_counts_per_ms=48)
     pmac = Pmac(sim, i10=2**21, table=pmac_default_table(0xC000, 2048))
     pmac.add_channel(0xC000, belt)
     pmac.set_ivar(193, 1833)
@@ -235,7 +236,7 @@ def test_ix93_1833_selects_the_default_pmac_table_time_base(sim: Simulation) -> 
 
 
 def test_ix93_pointing_at_nothing(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048)
     with pytest.raises(ConfigurationError, match=r"I193 \(Ix93 of CS1\) = \$0729 \(1833\) is not allowed \(allowed: "
                                                  r"addresses of time-base registers: \$2000 \(CS1 % register\), "

@@ -9,8 +9,9 @@ from __future__ import annotations
 from fractions import Fraction
 
 import pytest
+from cycle_probe import record_each_cycle
 
-from cosim.controllers.pmac import rigs
+from cosim import rigs
 from cosim.controllers.pmac.ect import (
     ARMED,
     FROZEN,
@@ -22,10 +23,10 @@ from cosim.controllers.pmac.ect import (
     pmac_default_table,
 )
 from cosim.controllers.pmac.encoder import EncoderChannel
-from cosim.controllers.pmac.testbench import AnalyticConveyor, record_each_cycle
 from cosim.controllers.pmac.units import I10_DEFAULT, ServoClock, formula_percent
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.plants.analytic import IdealConveyor
 
 I10_250US = 2**21  # 250 us = 15625 ns * 16: whole counts per cycle at the speeds below
 
@@ -50,7 +51,7 @@ def test_time_base_value_equals_formula_in_register_units(
         result      0     tb     tb     tb        tb = 2 * SF * 32 * f * 0.25 ms
     """
     assert formula_percent(scale_factor, freq_counts_per_ms) == expected_pct
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=freq_counts_per_ms)
+    belt = IdealConveyor(sim, speed_counts_per_ms=freq_counts_per_ms)
     rig = rigs.external_time_base(sim, belt, scale_factor=scale_factor, i10=I10_250US)
     values = record_each_cycle(sim, rig.pmac.clock, lambda k, t: rig.entry.result, cycles=20)
     rig.pmac.start()
@@ -64,7 +65,7 @@ def test_time_base_value_equals_formula_in_register_units(
 def test_default_i10_time_base_averages_exactly_and_jitters_by_one_lsb(sim: Simulation) -> None:
     """With I10 = 3,713,707 a cycle holds 28.33 counts: each value is within 2*SF (one 1/32 count)
     of the formula, and their sum is exactly 2 * SF * (1/T travel in 1/32 count)."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048)
     clock = rig.pmac.clock
     rows = record_each_cycle(sim, clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=200)
@@ -81,7 +82,7 @@ def test_default_i10_time_base_averages_exactly_and_jitters_by_one_lsb(sim: Simu
 
 def test_triggered_entry_running_gives_the_same_percent_with_one_eighth_sf(sim: Simulation) -> None:
     """Turbo triggered entry: 1/256 count, SF = 16384 / RTIF: 256 counts/ms with SF 64 is 100 %."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=256)
+    belt = IdealConveyor(sim, speed_counts_per_ms=256)
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=64, method=RUNNING, i10=I10_250US)
     values = record_each_cycle(sim, rig.pmac.clock, lambda k, t: rig.entry.result, cycles=10)
     rig.pmac.start()
@@ -91,7 +92,7 @@ def test_triggered_entry_running_gives_the_same_percent_with_one_eighth_sf(sim: 
 
 
 def test_result_saturates_at_24_bits(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=1024)
+    belt = IdealConveyor(sim, speed_counts_per_ms=1024)
     rig = rigs.external_time_base(sim, belt, scale_factor=8192, i10=I10_250US)  # 4096 %: too big
     rig.pmac.start()
     sim.run(until=rig.pmac.clock.t_ns(3) + 1)
@@ -101,7 +102,7 @@ def test_result_saturates_at_24_bits(sim: Simulation) -> None:
 
 def test_table_runs_top_to_bottom_so_a_later_source_is_one_cycle_old(sim: Simulation) -> None:
     """A time-base entry above its 1/T source differentiates last cycle's positions."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     channels = {0x078000: EncoderChannel(sim, 0x078000, belt)}
     table = ConversionTable()
     early = table.add(TimeBaseEntry(0x3503, 2048), at=0x3501)  # reads $3503, which runs after it
@@ -125,7 +126,7 @@ def test_pmac_default_table_result_is_at_0729(sim: Simulation) -> None:
 
 def test_triggered_states_frozen_and_armed_output_zero(sim: Simulation) -> None:
     """Frozen ($9) and armed ($B): result 0, master position still tracked in 1/256 count."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=256)
+    belt = IdealConveyor(sim, speed_counts_per_ms=256)
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=64, method=FROZEN, i10=I10_250US)
     rows = record_each_cycle(sim, rig.pmac.clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=6)
     rig.pmac.start()
@@ -180,7 +181,7 @@ def test_24_bit_position_wrap_does_not_disturb_the_time_base(sim: Simulation) ->
         position   524,188 ... 524,288 (= 2^19, register back to 0) ... 524,388
         result     tb tb tb tb tb tb tb                                      (unchanged)
     """
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, position_counts=2**19 - 100)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64, position_counts=2**19 - 100)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, i10=I10_250US)
     rows = record_each_cycle(sim, rig.pmac.clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=20)
     rig.pmac.start()

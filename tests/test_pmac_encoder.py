@@ -8,10 +8,11 @@ from typing import Any
 
 import pytest
 
-from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSample, SignalEncoder, extend_one_over_t
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac.encoder import EncoderChannel
+from cosim.encoders import EncoderSample, SignalEncoder, extend_one_over_t
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.plants.analytic import IdealConveyor
 from cosim.signals import Signal
 from cosim.timebase import Priority
 
@@ -23,7 +24,7 @@ def test_one_over_t_extends_between_edges() -> None:
         edges   |----------|----- t = last + 4000
                 0        16000
     """
-    sample = EncoderSample(count=10, last_edge_t_ns=16_000, prev_edge_t_ns=0)
+    sample = EncoderSample(count=10, last_edge_t=16_000, prev_edge_t=0)
     assert extend_one_over_t(sample, 16_000, 5) == 320
     assert extend_one_over_t(sample, 20_000, 5) == 328  # 10 + 8/32
     assert extend_one_over_t(sample, 20_000, 8) == 2624  # 10 + 64/256
@@ -31,12 +32,12 @@ def test_one_over_t_extends_between_edges() -> None:
 
 
 def test_one_over_t_clamps_below_the_next_count_and_handles_down_edges() -> None:
-    sample = EncoderSample(count=10, last_edge_t_ns=16_000, prev_edge_t_ns=0)
+    sample = EncoderSample(count=10, last_edge_t=16_000, prev_edge_t=0)
     assert extend_one_over_t(sample, 10**9, 5) == 10 * 32 + 31
-    down = EncoderSample(count=10, last_edge_t_ns=16_000, prev_edge_t_ns=0, direction=-1)
+    down = EncoderSample(count=10, last_edge_t=16_000, prev_edge_t=0, direction=-1)
     assert extend_one_over_t(down, 20_000, 5) == 11 * 32 - 8  # boundary 11 crossed downwards
     assert extend_one_over_t(EncoderSample(count=3), 5, 5) == 96  # no edges yet: whole counts
-    assert extend_one_over_t(EncoderSample(count=3, last_edge_t_ns=4), 5, 5) == 96
+    assert extend_one_over_t(EncoderSample(count=3, last_edge_t=4), 5, 5) == 96
 
 
 def test_signal_encoder_takes_edge_times_from_signal_changes(sim: Simulation) -> None:
@@ -66,7 +67,7 @@ def test_capture_latches_first_trigger_until_read(sim: Simulation) -> None:
         flag    _|‾‾‾‾‾‾‾‾‾‾‾‾‾|_____|‾‾‾‾
         read                   ^ (returns mark 1's position, re-arms)
     """
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[100, 200, 300], mark_width_counts=2)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=[100, 200, 300], mark_width_counts=2)
     channel = EncoderChannel(sim, 0x078008, belt, trigger=belt.mark)
     reads: list[int] = []
 
@@ -85,7 +86,7 @@ def test_capture_latches_first_trigger_until_read(sim: Simulation) -> None:
 
 def test_capture_is_level_triggered_on_re_arm(sim: Simulation) -> None:
     """A read while the mark is still under the sensor latches again at once (position of the read)."""
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[100], mark_width_counts=10)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=[100], mark_width_counts=10)
     channel = EncoderChannel(sim, 0x078008, belt, trigger=belt.mark)
 
     def host() -> Generator[Any, Any, None]:
@@ -99,7 +100,7 @@ def test_capture_is_level_triggered_on_re_arm(sim: Simulation) -> None:
 
 
 def test_capture_sub_count_position_matches_master_within_1_256(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=Fraction(577, 9), marks=[Fraction(12345, 7)])
+    belt = IdealConveyor(sim, speed_counts_per_ms=Fraction(577, 9), marks=[Fraction(12345, 7)])
     channel = EncoderChannel(sim, 0x078008, belt, trigger=belt.mark)
     sim.run(until=40_000_000)
     (t, pos256), = channel.captures
@@ -108,7 +109,7 @@ def test_capture_sub_count_position_matches_master_within_1_256(sim: Simulation)
 
 
 def test_channel_registers_and_bad_offsets(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     channel = EncoderChannel(sim, 0x078008, belt)
     assert channel.read_register(0) == 0
     assert channel.read_register(3) == 0

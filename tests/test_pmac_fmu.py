@@ -19,31 +19,30 @@ import math
 from fractions import Fraction
 
 import pytest
+from cycle_probe import record_each_cycle
 
+from cosim import rigs
 from cosim.controllers.pmac import (
     ARMED,
     FROZEN,
     I10_DEFAULT,
     EncoderChannel,
-    EncoderSample,
     LinearMove,
     Pmac,
     ServoClock,
     design_pid,
     formula_percent,
-    rigs,
 )
-from cosim.controllers.pmac.plants import (
-    DAC_VOLTS_PER_BIT,
-    PlantEncoder,
+from cosim.controllers.pmac.servo import DAC_VOLTS_PER_BIT
+from cosim.couplings.encoder import PlantEncoder, watch_mark
+from cosim.couplings.servo import (
     connect_servo,
     dac_volts,
     full_model_margins,
     full_scale_speed_counts_per_ms,
     servo_motor_model,
-    watch_mark,
 )
-from cosim.controllers.pmac.testbench import record_each_cycle
+from cosim.encoders import EncoderSample
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.master import Plant
@@ -63,10 +62,15 @@ MOTOR = ServoParameters.from_mapping(load_preset("servo_maxon_re40_24v"))
 class EncoderDouble:
     """A plant double with the FMUs' encoder outputs (edge instants in float seconds)."""
 
+    name = "double"
+
     def __init__(self, sim: Simulation, **outputs: float) -> None:
         self.sim = sim
         self.outputs = {"encoder_count": 0, "edge_direction": 1, "t_last_edge": 0.0, "t_prev_edge": 0.0, **outputs}
         self.driven: list[tuple[str, float]] = []
+
+    def variable_names(self) -> list[str]:
+        return [*self.outputs, "u_cmd"]
 
     def read(self, variable: str) -> float:
         return self.outputs[variable]
@@ -99,7 +103,7 @@ def test_plant_encoder_ceils_edge_instants_to_ns_and_ignores_the_start_time(sim:
 
 def test_plant_encoder_position_is_1_over_t_truncated(sim: Simulation) -> None:
     double = EncoderDouble(sim, encoder_count=10, t_last_edge=31.25e-6, t_prev_edge=0.0)
-    encoder = PlantEncoder(double, start_ns=-1)
+    encoder = PlantEncoder(double, start=-1)
     sim.run(until=31_250 + 15_625 + 976)  # half a count + 1/32 count after the edge, less 1 ns
     assert encoder.position(fraction_bits=5) == Fraction(10 * 32 + 16, 32)
     assert encoder.position(fraction_bits=8) == Fraction(10 * 256 + 135, 256)
@@ -107,7 +111,7 @@ def test_plant_encoder_position_is_1_over_t_truncated(sim: Simulation) -> None:
 
 def test_plant_encoder_reads_only_now(sim: Simulation) -> None:
     encoder = PlantEncoder(EncoderDouble(sim))
-    with pytest.raises(ConfigurationError, match=r"t_ns of PlantEncoder\.sample = 5 is not allowed"):
+    with pytest.raises(ConfigurationError, match=r"t of PlantEncoder\.sample = 5 is not allowed"):
         encoder.sample(5)
 
 

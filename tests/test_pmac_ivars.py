@@ -9,9 +9,9 @@ import pytest
 from cosim.controllers.pmac.ect import RUNNING, TriggeredTimeBaseEntry
 from cosim.controllers.pmac.ivars import Assignment, cs_ivar, parse_setup
 from cosim.controllers.pmac.machine import Pmac
-from cosim.controllers.pmac.testbench import AnalyticConveyor
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.plants.analytic import IdealConveyor
 
 MANUAL_EXAMPLE = """\
 ; Turbo PMAC triggered time base, as in the manual
@@ -65,7 +65,7 @@ def test_setup_errors_name_line_variable_value_and_range(text: str, message: str
 
 
 def test_manual_example_loads_into_the_machine(sim: Simulation) -> None:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=256)
+    belt = IdealConveyor(sim, speed_counts_per_ms=256)
     pmac = Pmac(sim)
     pmac.add_channel(0x078018, belt)
     pmac.load_setup(MANUAL_EXAMPLE, source="cell.pmc")
@@ -82,7 +82,7 @@ def test_manual_example_loads_into_the_machine(sim: Simulation) -> None:
 
 def test_setup_with_an_untriggered_entry_and_pmac_style_numbers(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.add_channel(0x078000, AnalyticConveyor(sim, speed_counts_per_ms=48))
+    pmac.add_channel(0x078000, IdealConveyor(sim, speed_counts_per_ms=48))
     pmac.load_setup("I8000=$078000\nI8001=$403501\nI8002=2048\nI193=$3503 I194=8388607\n")
     pmac.start()
     sim.run(until=pmac.clock.t_ns(4) + 1)
@@ -110,7 +110,7 @@ def test_setup_errors_in_the_table_and_ix93(sim: Simulation, text: str, message:
 
 def test_run_time_writes_check_the_method_digit(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.add_channel(0x078008, AnalyticConveyor(sim, speed_counts_per_ms=64))
+    pmac.add_channel(0x078008, IdealConveyor(sim, speed_counts_per_ms=64))
     pmac.load_setup("I8010=$978008 I8011=256 I5193=@I8011")
     pmac.start()
     with pytest.raises(ConfigurationError, match=r"line 7: I8010 \(method digit \$8\) = \$878008 is not allowed "

@@ -6,13 +6,13 @@ import math
 
 import pytest
 
-from cosim.controllers.pmac import rigs
+from cosim import rigs
 from cosim.controllers.pmac.motion import LinearMove
 from cosim.controllers.pmac.servo import MotorModel, PidLoop, design_pid
-from cosim.controllers.pmac.testbench import AnalyticConveyor, DcMotorStandIn
 from cosim.controllers.pmac.units import ServoClock
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.plants.analytic import DcMotor, IdealConveyor
 
 MOTOR = MotorModel(gain_counts_per_s_per_bit=6.0, tau_s=0.01)  # ~197 counts/ms at full DAC, 10 ms
 PERIOD_S = ServoClock().period_s
@@ -56,10 +56,11 @@ def test_closed_loop_follows_a_time_base_move_on_the_motor_stand_in(sim: Simulat
         error   _/^^^^^^^^^^^^^^\______ (< 100 counts, then -> 0)
     """
     design = design_pid(MOTOR, period_s=PERIOD_S, bandwidth_hz=50)
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, loop=PidLoop(design))
-    plant = DcMotorStandIn(sim, rig.motor.dac, MOTOR)
-    rig.motor.feedback = plant.encoder_count
+    plant = DcMotor(sim, gain=MOTOR.gain_counts_per_s_per_bit, tau_s=MOTOR.tau_s)
+    plant.drive("command", rig.motor.dac)
+    rig.motor.feedback = lambda: plant.read("encoder_count")
     rig.cs.run_program([LinearMove(2000, 40_000, 20)])
     rig.pmac.start()
     sim.run(until=sim.ticks("250 ms"))
@@ -77,10 +78,11 @@ def test_unstable_gains_diverge_in_simulation(sim: Simulation) -> None:
     from dataclasses import replace
 
     hot = replace(design, c=tuple(30 * c for c in design.c), d=30 * design.d)
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, loop=PidLoop(hot))
-    plant = DcMotorStandIn(sim, rig.motor.dac, MOTOR)
-    rig.motor.feedback = plant.encoder_count
+    plant = DcMotor(sim, gain=MOTOR.gain_counts_per_s_per_bit, tau_s=MOTOR.tau_s)
+    plant.drive("command", rig.motor.dac)
+    rig.motor.feedback = lambda: plant.read("encoder_count")
     rig.cs.run_program([LinearMove(200, 40_000, 20)])
     rig.pmac.start()
     sim.run(until=sim.ticks("60 ms"))
@@ -109,7 +111,7 @@ def test_bad_motor_model() -> None:
 
 def test_motor_with_loop_needs_feedback(sim: Simulation) -> None:
     design = design_pid(MOTOR, period_s=PERIOD_S, bandwidth_hz=50)
-    rig = rigs.external_time_base(sim, AnalyticConveyor(sim, speed_counts_per_ms=64), scale_factor=2048,
+    rig = rigs.external_time_base(sim, IdealConveyor(sim, speed_counts_per_ms=64), scale_factor=2048,
                                   loop=PidLoop(design))
     rig.pmac.start()
     with pytest.raises(ConfigurationError, match="motor 1 has a position loop but no feedback"):

@@ -10,19 +10,21 @@ from collections.abc import Generator
 from fractions import Fraction
 from typing import Any
 
-from cosim.controllers.pmac import rigs
+from cycle_probe import record_each_cycle
+
+from cosim import rigs
 from cosim.controllers.pmac.ect import ARMED, FROZEN, RUNNING, TriggeredTimeBaseEntry
 from cosim.controllers.pmac.motion import LinearMove, compile_items
-from cosim.controllers.pmac.testbench import AnalyticConveyor, record_each_cycle
 from cosim.kernel import Simulation
+from cosim.plants.analytic import IdealConveyor
 from cosim.timebase import Priority
 
 MOVE = LinearMove(3000, 64_000, 10)
 
 
 def _setup(sim: Simulation, *, initial: int, marks: list[Fraction | int],
-           width_counts: int = 5) -> tuple[rigs.Rig[TriggeredTimeBaseEntry], AnalyticConveyor]:
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=marks, mark_width_counts=width_counts)
+           width_counts: int = 5) -> tuple[rigs.Rig[TriggeredTimeBaseEntry], IdealConveyor]:
+    belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=marks, mark_width_counts=width_counts)
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=initial)
     return rig, belt
 

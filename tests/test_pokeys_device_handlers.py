@@ -13,8 +13,8 @@ from __future__ import annotations
 import pytest
 
 from cosim.controllers.pokeys import PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
 from cosim.controllers.pokeys.limits import SLOT_NS
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
 from cosim.pokeys_device.client import DirectClient

@@ -19,7 +19,7 @@ from contextlib import contextmanager
 import pytest
 
 from cosim.controllers.pokeys import SLOT_NS, PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.pokeys_device import DeviceIdentity

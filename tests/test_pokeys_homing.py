@@ -16,7 +16,7 @@ from __future__ import annotations
 import pytest
 
 from cosim.controllers.pokeys import AxisConfig, AxisState, EngineConfig, EngineState, PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.timebase import Priority

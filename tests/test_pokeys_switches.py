@@ -20,8 +20,8 @@ from cosim.controllers.pokeys import (
     PulseEngine,
     encode_entry,
 )
-from cosim.controllers.pokeys.axis_double import PositionSwitch
 from cosim.controllers.scripted import play
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.kernel import Simulation
 from cosim.timebase import Priority
 

@@ -20,6 +20,7 @@ from pathlib import Path
 import control
 import numpy as np
 import pytest
+from encoder_oracle import one_over_t_position
 from fmpy import simulate_fmu
 from fmpy.build import build_platform_binary
 from fmpy.validation import validate_fmu
@@ -35,7 +36,6 @@ from cosim.master import Plant
 from cosim.plants.servo import (
     ServoParameters,
     linear_model,
-    one_over_t_position,
     steady_state_speed,
 )
 from cosim.presets import load_preset

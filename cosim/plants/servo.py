@@ -11,15 +11,13 @@ transfer functions (python-control), and the tests compare the FMU's step respon
 :func:`steady_state_speed` includes Coulomb friction and the load torque.
 
 The encoder reports the instants of its last two edges, so a controller can extend the count
-between edges as 1/T hardware does (:func:`one_over_t_position`).
+between edges as 1/T hardware does (:func:`cosim.encoders.extend_one_over_t`).
 
 Examples
 --------
 >>> motor = ServoParameters()                 # the Servo FMU's defaults (a maxon RE 40, 24 V)
 >>> round(steady_state_speed(motor, u_cmd_v=10.0), 1)   # 24 V on the motor [rad/s]
 796.8
->>> one_over_t_position(edge_count=10, edge_direction=1, t_last_edge_s=0.25, t_prev_edge_s=0.125, t_s=0.3125)
-10.5
 """
 
 from __future__ import annotations
@@ -146,26 +144,3 @@ def steady_state_speed(params: ServoParameters, *, u_cmd_v: float, load_torque_n
     return (stall - friction) / (p.viscous_friction + p.torque_constant * p.back_emf_constant / p.resistance)
 
 
-def one_over_t_position(*, edge_count: int, edge_direction: int, t_last_edge_s: float, t_prev_edge_s: float,
-                        t_s: float) -> float:
-    """Encoder position [counts] at ``t_s`` extended between edges from the edge timestamps.
-
-    ``edge_count + edge_direction * (t - t_last_edge) / (t_last_edge - t_prev_edge)``: the
-    fraction of a count is the time since the last edge over the time between the last two, as in
-    1/T encoder hardware (which also truncates it to its resolution and clamps it below one
-    count; this function does neither). Before there are two edges the edge count is returned.
-
-    Parameters
-    ----------
-    edge_count : int
-        The count boundary the last edge crossed (the FMU's ``edge_count``) [counts].
-    edge_direction : int
-        +1 or -1 (the FMU's ``edge_direction``).
-    t_last_edge_s, t_prev_edge_s : float
-        Instants of the last two edges [s].
-    t_s : float
-        Instant of the estimate [s], at or after the last edge.
-    """
-    if not t_last_edge_s > t_prev_edge_s:
-        return float(edge_count)
-    return edge_count + edge_direction * (t_s - t_last_edge_s) / (t_last_edge_s - t_prev_edge_s)

@@ -230,32 +230,6 @@ def phase_after(duration_s: Fraction, *, rate_hz: Fraction, phase: Fraction) -> 
     return elapsed - math.floor(elapsed)
 
 
-def segment_inputs(duration_ns: int, count: int, direction: int) -> tuple[float, float]:
-    """``(step_rate, step_phase)`` for a :class:`~cosim.signals.PulseTrain` segment.
-
-    A segment puts pulse k (0..count-1) at ``t0 + (k * duration) // count``; set these inputs at
-    ``t0`` (and ``step_rate = 0`` at ``t0 + duration`` unless another segment follows). The FMU
-    places the pulses at the exact ``t0 + k * duration / count``: at most 1 ns from the floored
-    instants of the segment rule.
-
-    Parameters
-    ----------
-    duration_ns : int
-        Segment length [ns] (> 0).
-    count : int
-        Pulses in the segment (>= 0).
-    direction : int
-        +1 or -1 (1 = positive).
-    """
-    if duration_ns <= 0:
-        raise ConfigurationError.out_of_range("duration_ns", duration_ns, "> 0")
-    if count < 0:
-        raise ConfigurationError.out_of_range("count", count, ">= 0")
-    if direction not in (1, -1):
-        raise ConfigurationError.out_of_range("direction", direction, "1 or -1")
-    return direction * count * 1e9 / duration_ns, 0.0
-
-
 # -- driving the FMU on its own -------------------------------------------------------------------
 class _SteppedFmu(Protocol):
     t: int

@@ -80,7 +80,7 @@ def switch_wiring(limits: list[str], homes: list[str]) -> Callable[[Simulation, 
     specs += [("home", *parse_switch(t, kind="home")) for t in homes]
 
     def wire(sim: Simulation, engine: PulseEngine) -> None:
-        from cosim.controllers.pokeys.axis_double import PositionSwitch
+        from cosim.couplings.ideal_axis import PositionSwitch
 
         for kind, axis, side, at in specs:
             if kind == "limit":

@@ -18,10 +18,12 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+from cosim import rigs
 from cosim.checks import Bound, IntervalsAbove, ValueAt
-from cosim.controllers.pmac import LinearMove, rigs, scale_factor_for
-from cosim.controllers.pmac.testbench import SERVO_AXIS, AnalyticConveyor
+from cosim.controllers.pmac import LinearMove, scale_factor_for
 from cosim.controllers.pmac.units import IX94_MAX
+from cosim.plants.analytic import IdealConveyor
+from cosim.rigs import SERVO_AXIS
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -37,7 +39,7 @@ def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
     ms = sim.ticks("1 ms")
     rtif = Fraction(p.rtif)
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=rtif, phases=[(30 * ms, 0), (10 * ms, -rtif / 40)])
+    belt = IdealConveyor(sim, speed_counts_per_ms=rtif, phases=[(30 * ms, 0), (10 * ms, -rtif / 40)])
     rig = rigs.external_time_base(sim, belt, scale_factor=scale_factor_for(rtif), ix94=p.ix94,
                                   slave=SERVO_AXIS, bandwidth_hz=p.bandwidth_hz)
     rig.cs.run_program([LinearMove(10**7, rtif * 1000, 50)])

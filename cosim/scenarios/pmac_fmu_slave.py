@@ -27,25 +27,11 @@ from collections.abc import Generator
 from fractions import Fraction
 from typing import Any
 
+from cosim import rigs
 from cosim.checks import Bound, Duration, EdgeRef, ValueAt
-from cosim.controllers.pmac import (
-    ARMED,
-    FROZEN,
-    I10_DEFAULT,
-    RUNNING,
-    LinearMove,
-    PidLoop,
-    ServoClock,
-    design_pid,
-    rigs,
-)
-from cosim.controllers.pmac.plants import (
-    PlantEncoder,
-    connect_servo,
-    full_model_margins,
-    servo_motor_model,
-    watch_mark,
-)
+from cosim.controllers.pmac import ARMED, FROZEN, I10_DEFAULT, RUNNING, LinearMove, PidLoop, ServoClock, design_pid
+from cosim.couplings.encoder import PlantEncoder, watch_mark
+from cosim.couplings.servo import connect_servo, full_model_margins, servo_motor_model
 from cosim.plants.conveyor import ConveyorParameters, mark_edge_times
 from cosim.plants.servo import ServoParameters
 from cosim.presets import load_preset

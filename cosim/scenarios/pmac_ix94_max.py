@@ -15,9 +15,10 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+from cosim import rigs
 from cosim.checks import Bound, IntervalsAbove
-from cosim.controllers.pmac import IX94_MAX, LinearMove, rigs, scale_factor_for
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac import IX94_MAX, LinearMove, scale_factor_for
+from cosim.plants.analytic import IdealConveyor
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -30,7 +31,7 @@ UNTIL = "100 ms"
 def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
     rtif = Fraction(p.rtif)
-    belt = AnalyticConveyor(sim, phases=[(sim.ticks(p.accel_ms, "ms"), rtif / p.accel_ms)])
+    belt = IdealConveyor(sim, phases=[(sim.ticks(p.accel_ms, "ms"), rtif / p.accel_ms)])
     rig = rigs.external_time_base(sim, belt, scale_factor=scale_factor_for(rtif), ix94=IX94_MAX)
     rig.cs.run_program([LinearMove(10**7, rtif * 1000, 10)])
     rig.pmac.start()

@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+from cosim import rigs
 from cosim.checks import Duration, EdgeRef, IntervalsAbove, ValueAt
-from cosim.controllers.pmac import LinearMove, rigs, scale_factor_for
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac import LinearMove, scale_factor_for
+from cosim.plants.analytic import IdealConveyor
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -36,7 +37,7 @@ def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
     rtif = Fraction(p.rtif)
     accel_ns = sim.ticks(p.accel_ms, "ms")
-    belt = AnalyticConveyor(sim, phases=[(accel_ns, rtif / p.accel_ms)])
+    belt = IdealConveyor(sim, phases=[(accel_ns, rtif / p.accel_ms)])
     sf = scale_factor_for(rtif)
     rig = rigs.external_time_base(sim, belt, scale_factor=sf, ix94=p.ix94)
     rig.cs.run_program([LinearMove(10**7, rtif * 1000, 10)])

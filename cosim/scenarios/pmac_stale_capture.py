@@ -19,10 +19,11 @@ checks for the correct start.
 
 from __future__ import annotations
 
+from cosim import rigs
 from cosim.checks import ValueAt
-from cosim.controllers.pmac import RUNNING, TriggeredTimeBaseEntry, rigs
-from cosim.controllers.pmac.rigs import Rig
-from cosim.controllers.pmac.testbench import AnalyticConveyor
+from cosim.controllers.pmac import RUNNING, TriggeredTimeBaseEntry
+from cosim.plants.analytic import IdealConveyor
+from cosim.rigs import Rig
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -33,7 +34,7 @@ PARAMETERS = (
 UNTIL = "40 ms"
 
 
-def stale_capture_run(run: Run, *, dummy_read: bool) -> tuple[AnalyticConveyor, Rig[TriggeredTimeBaseEntry], int]:
+def stale_capture_run(run: Run, *, dummy_read: bool) -> tuple[IdealConveyor, Rig[TriggeredTimeBaseEntry], int]:
     """The set-up and the time-zero error figure (shared with ``pmac_stale_capture_fix``); returns
     the belt, the rig and the instant of mark 2."""
     sim, p = run.sim, run.p

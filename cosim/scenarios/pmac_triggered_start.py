@@ -20,9 +20,11 @@ from collections.abc import Generator
 from fractions import Fraction
 from typing import Any
 
+from cosim import rigs
 from cosim.checks import Bound, Duration, EdgeRef, ValueAt
-from cosim.controllers.pmac import ARMED, FROZEN, RUNNING, LinearMove, rigs, scale_factor_for
-from cosim.controllers.pmac.testbench import SERVO_AXIS, AnalyticConveyor
+from cosim.controllers.pmac import ARMED, FROZEN, RUNNING, LinearMove, scale_factor_for
+from cosim.plants.analytic import IdealConveyor
+from cosim.rigs import SERVO_AXIS
 from cosim.scenario import Param, Run
 from cosim.timebase import Priority
 
@@ -40,7 +42,7 @@ def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
     rtif = Fraction(p.rtif)
     mark = Fraction(str(p.mark_counts))
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=rtif, marks=[mark], mark_width_counts=5)
+    belt = IdealConveyor(sim, speed_counts_per_ms=rtif, marks=[mark], mark_width_counts=5)
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=scale_factor_for(rtif, triggered=True),
                                    method=FROZEN, slave=SERVO_AXIS, bandwidth_hz=p.bandwidth_hz)
     rig.cs.run_program([LinearMove(2000, rtif * 1000, 20)])

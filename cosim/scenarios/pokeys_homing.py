@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from cosim.checks import ValueAt
 from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.scenario import Param, Run
 
 PARAMETERS = (

@@ -9,7 +9,7 @@ and axis::
     buffer_level  ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾\\__       kept at ``prefill`` slots, no underrun
 
 With ``steppers`` (default) each axis drives a Stepper FMU (NEMA 17 preset, FMI 3.0) through
-:func:`~cosim.controllers.pokeys.plant.couple_stepper`: one ``step_rate`` change per slot at most,
+:func:`~cosim.couplings.stepper.couple_stepper`: one ``step_rate`` change per slot at most,
 none while the rate holds.
 
 Checks: at most 25 pulses per slot on every axis, pulses at least 40 us apart, the direction set
@@ -23,7 +23,7 @@ from cosim.checks import DirectionSetup, IntervalsAbove, MinPulseSpacing, Pulses
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
-from cosim.controllers.pokeys.plant import couple_stepper
+from cosim.couplings.stepper import couple_stepper
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -48,7 +48,7 @@ def scenario(run: Run) -> None:
     counts = plan([Move(t) for t in targets], config.axes)
     host = HostApp(run.sim, engine, to_entries(counts), link=p.link, prefill_slots=p.prefill)
     plants = [run.plant("Stepper", name=f"stepper_{axis}", preset=PRESET) for axis in AXES] if p.steppers else []
-    couplings = [couple_stepper(run.sim, engine, a, plant) for a, plant in enumerate(plants)]
+    couplings = [couple_stepper(engine.step_dir(a), plant) for a, plant in enumerate(plants)]
 
     end = targets[-1]
     for a, axis in enumerate(AXES):
@@ -60,7 +60,7 @@ def scenario(run: Run) -> None:
         run.check(ValueAt(step, None, end[a], name=f"{axis}: pulses emitted add up to {end[a]}"))
         run.check(ValueAt(f"pokeys.{axis}.position", None, end[a], name=f"{axis}: position counter = {end[a]}"))
         if p.steppers:
-            run.check(ValueAt(couplings[a].commanded_signal, None, end[a],
+            run.check(ValueAt(f"{plants[a].name}.commanded_steps", None, end[a],
                               name=f"{axis}: stepper commanded_steps = position counter = {end[a]}"))
     run.check(IntervalsAbove("pokeys.underrun", 0, name="no buffer underrun"))
     run.figure("slots", len(counts))

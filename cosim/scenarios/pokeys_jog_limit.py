@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, IntervalsAbove, PulseRef, ValueAt
 from cosim.controllers.pokeys import AxisConfig, EngineConfig, EngineState, PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.scenario import Param, Run
 
 MS = 1_000_000

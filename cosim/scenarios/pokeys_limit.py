@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, PulseRef, ValueAt
 from cosim.controllers.pokeys import SLOT_NS, AxisConfig, EngineConfig, PulseEngine
-from cosim.controllers.pokeys.axis_double import PositionSwitch
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.scenario import Param, Run
 
 PARAMETERS = (

@@ -19,6 +19,7 @@ from __future__ import annotations
 from cosim.checks import EdgeAtPosition, ValueAt
 from cosim.controllers.trio import TrioController
 from cosim.controllers.trio.basic import example
+from cosim.couplings.laser import couple_laser
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -43,8 +44,7 @@ def scenario(run: Run) -> None:
         trio.set_param(name.upper(), getattr(p, name), axis=3)
     if p.laser:
         laser = run.plant("Laser", name="laser", preset="laser_co2_40w")
-        for variable, (signal, convert) in trio.laser_inputs(3).items():
-            laser.drive(variable, signal, convert=convert)
+        couple_laser(trio.pwm_port(3), laser)
         laser.record(["power", "energy"], period=sim.ticks(1, "ms"))
     program = example("tn20_81").start(trio)
     edges = len(FORWARD + REVERSE) * p.passes

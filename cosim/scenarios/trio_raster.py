@@ -25,6 +25,7 @@ from cosim.checks.base import Findings, fmt, records
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
 from cosim.controllers.trio.raster import RasterJob
+from cosim.couplings.laser import couple_laser
 from cosim.scenario import Param, Run
 from cosim.timebase import Priority
 
@@ -108,8 +109,7 @@ def raster_job(run: Run) -> RasterJob:
     job.fill_table(proc)
     if p.laser:
         laser = run.plant("Laser", name="laser", preset="laser_co2_40w")
-        for variable, (signal, convert) in trio.laser_inputs(3).items():
-            laser.drive(variable, signal, convert=convert)
+        couple_laser(trio.pwm_port(3), laser)
         run.figure("energy_J", lambda: float(laser.read("energy")), "J")
     done: list[bool] = []
 

@@ -26,6 +26,7 @@ from cosim.checks import Bound, Check, Clock
 from cosim.checks.base import Findings, held_index, records
 from cosim.checks.result import Violation
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
+from cosim.couplings.laser import couple_laser
 from cosim.scenario import Param, Run
 from cosim.timebase import Priority
 
@@ -114,8 +115,7 @@ def scenario(run: Run) -> None:
         proc.pwm_control(1, axis=3)
     if p.laser:
         laser = run.plant("Laser", name="laser", preset="laser_co2_40w")
-        for variable, (signal, convert) in trio.laser_inputs(3).items():
-            laser.drive(variable, signal, convert=convert)
+        couple_laser(trio.pwm_port(3), laser)
         laser.record(["power", "energy"], period=trio.period_ns)
         run.figure("laser_energy_per_mm_J", lambda: float(laser.read("energy")) / 120.0, "J/mm")
 

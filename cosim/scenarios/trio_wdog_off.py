@@ -21,6 +21,7 @@ from typing import Any
 
 from cosim.checks import EdgeAtPosition, IntervalsAbove, ValueAt
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
+from cosim.couplings.laser import couple_laser
 from cosim.plants.laser import pwm_energy
 from cosim.presets import load_preset
 from cosim.scenario import Param, Run
@@ -51,8 +52,7 @@ def scenario(run: Run) -> None:
     t_off = sim.ticks(f"{p.wdog_off_ms} ms", name="wdog_off_ms")
     if p.laser:
         laser = run.plant("Laser", name="laser", preset=PRESET)
-        for variable, (signal, convert) in trio.laser_inputs(3).items():
-            laser.drive(variable, signal, convert=convert)
+        couple_laser(trio.pwm_port(3), laser)
         laser.record(["power", "energy"], period=sim.ticks(100, "us"))
 
     def job() -> Any:

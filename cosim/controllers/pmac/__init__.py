@@ -8,7 +8,8 @@ freezes, arms and starts motion at a captured master position. See ``docs/pmac.m
 Modules: :mod:`.units` (I10, servo clock, 2^-23 ms units), :mod:`.encoder` (1/T extension,
 capture), :mod:`.ect` (conversion table), :mod:`.motion` (moves), :mod:`.coord` (coordinate
 system, Ix93/Ix94, slip), :mod:`.servo` (PID design and loop), :mod:`.motor`, :mod:`.ivars`
-(setup text), :mod:`.machine` (the controller), :mod:`.testbench` (plant stand-ins).
+(setup text), :mod:`.machine` (the controller). Encoders and their 1/T extension are shared with
+the plants in :mod:`cosim.encoders`; ready-made machines are in :mod:`cosim.rigs`.
 """
 
 from cosim.controllers.pmac.coord import CoordinateSystem, LimitEvent
@@ -25,7 +26,7 @@ from cosim.controllers.pmac.ect import (
     TriggerStart,
     pmac_default_table,
 )
-from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSample, EncoderSource, SignalEncoder
+from cosim.controllers.pmac.encoder import EncoderChannel
 from cosim.controllers.pmac.ivars import parse_setup
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove
@@ -55,8 +56,6 @@ __all__ = [
     "Delay",
     "Dwell",
     "EncoderChannel",
-    "EncoderSample",
-    "EncoderSource",
     "LimitEvent",
     "LinearMove",
     "Motor",
@@ -66,7 +65,6 @@ __all__ = [
     "PidLoop",
     "Pmac",
     "ServoClock",
-    "SignalEncoder",
     "TimeBaseEntry",
     "TriggerStart",
     "TriggeredTimeBaseEntry",

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any
 
 import control
@@ -32,6 +33,8 @@ from cosim.errors import ConfigurationError
 
 #: Largest DAC output [bits] of a 16-bit DAC.
 DAC_MAX = 32767
+#: DAC output voltage per bit [V]: a 16-bit DAC whose 32768 bits are 10 V (+-32767 = +-9.9997 V).
+DAC_VOLTS_PER_BIT = Fraction(10, 32768)
 
 
 @dataclass(frozen=True)

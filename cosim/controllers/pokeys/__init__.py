@@ -5,7 +5,7 @@ Public API::
     from cosim.controllers.pokeys import PulseEngine, EngineConfig, AxisConfig, EngineState
     engine = PulseEngine(sim, EngineConfig())
     engine.fill_buffer([encode_entry((10, -5, 25))]); engine.set_state(EngineState.BUFFER)
-    couple_stepper(sim, engine, 0, plant)   # a Stepper FMU plant on axis x
+    couple_stepper(engine.step_dir(0), plant)   # cosim.couplings.stepper: a Stepper FMU on axis x
 
 See ``docs/pokeys.md`` for the rules and the choices where the vendor document is silent.
 """
@@ -28,7 +28,6 @@ from cosim.controllers.pokeys.limits import (
     PINS,
     SLOT_NS,
 )
-from cosim.controllers.pokeys.plant import StepperCoupling, couple_stepper, couple_switches
 from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
 from cosim.controllers.pokeys.records import FillReply, Register, Status, Underrun
 from cosim.controllers.pokeys.states import AxisState, EngineState
@@ -53,12 +52,9 @@ __all__ = [
     "SlotBuffer",
     "SlotLimits",
     "Status",
-    "StepperCoupling",
     "SwitchInputs",
     "SwitchSample",
     "Underrun",
-    "couple_stepper",
-    "couple_switches",
     "decode_axis",
     "decode_entry",
     "encode_axis",

@@ -48,7 +48,7 @@ from cosim.controllers.pokeys.states import AxisState, EngineState
 from cosim.controllers.pokeys.switches import SwitchInputs, SwitchSample
 from cosim.errors import ConfigurationError
 from cosim.kernel import At, Simulation
-from cosim.signals import PulseTrain, Signal
+from cosim.signals import PulseTrain, Signal, StepDirPort, SwitchPort
 from cosim.timebase import Priority
 
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
@@ -263,6 +263,27 @@ class PulseEngine:
         if self._underrun_start is None:
             return list(self.underruns)
         return [*self.underruns, Underrun(self._underrun_start, self._underrun_slots * SLOT_NS)]
+
+    # -- ports and the controller protocol -------------------------------------------------------
+    def step_dir(self, axis: int) -> StepDirPort:
+        """The step/direction output of ``axis`` (0..2); reversed when its direction is inverted."""
+        check_axis(axis, where="step_dir")
+        return StepDirPort(self.steps[axis], self.dirs[axis], reversed=self.config.axes[axis].invert_direction)
+
+    def switch_port(self, axis: int) -> SwitchPort:
+        """The limit and home inputs of ``axis`` (0..2)."""
+        check_axis(axis, where="switch_port")
+        sw = self.switches
+        return SwitchPort(limit_pos=sw.limit_pos[axis], limit_neg=sw.limit_neg[axis], home=sw.home[axis])
+
+    def outputs(self) -> list[Signal | PulseTrain]:
+        """Every signal the engine drives: step and direction outputs (:class:`cosim.controllers.Controller`)."""
+        return [*self.steps, *self.dirs]
+
+    def inputs(self) -> list[Signal]:
+        """Every signal the engine reads: limit, home and emergency inputs."""
+        sw = self.switches
+        return [*sw.limit_pos, *sw.limit_neg, *sw.home, sw.emergency]
 
     # -- the slot process ---------------------------------------------------------------------
     def pulse_slot(self) -> Generator[Any, Any, None]:

@@ -21,7 +21,7 @@ running move and one more); a further move makes its program wait.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable, Generator, Sequence
+from collections.abc import Generator, Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -37,6 +37,7 @@ from cosim.controllers.trio.params import (
     DEFAULT_TABLE_SIZE,
     FIFO_DEPTH,
     PWM_AXES,
+    PWM_CLOCK_HZ,
     PWM_ENCODER_MODULUS,
     PWM_REGISTER_MAX,
     READ_ONLY_AXIS_PARAMS,
@@ -50,7 +51,7 @@ from cosim.controllers.trio.params import (
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.kernel import Simulation
-from cosim.signals import Signal
+from cosim.signals import PulseTrain, PwmPort, Signal, StepDirPort
 from cosim.timebase import Priority
 
 #: Arguments each PWM_CONTROL mode takes after the mode.
@@ -390,17 +391,36 @@ class TrioController:
         """The gating FIFO of a PWM axis."""
         return self._gate(self.axis(axis).number, "gate")
 
-    def laser_inputs(self, axis: int = 3) -> dict[str, tuple[Signal, Callable[[float], bool | int]]]:
-        """The signals that drive a laser from PWM axis ``axis``: ``{input: (signal, convert)}``.
+    def pwm_port(self, axis: int = 3) -> PwmPort:
+        """The outputs that modulate a laser from PWM axis ``axis`` (see :mod:`cosim.couplings.laser`).
 
-        Input names are those of the Laser FMU (``enable`` = WDOG, ``gate``, ``pwm_period`` =
-        PWM_CYCLE, ``pwm_on`` = the mark, ``pwm_phase``); a scenario wires them with
-        ``for name, (signal, convert) in trio.laser_inputs(3).items(): plant.drive(name, signal, convert=convert)``.
+        ``enable`` is WDOG, ``gate`` the gate latch, ``period_clocks`` PWM_CYCLE, ``mark_clocks``
+        the mark (0 while PWM is off), ``phase_clocks`` the clock count the carrier starts at; the
+        clock is the 20 MHz PWM clock.
         """
         pwm, gate = self.pwm(axis), self.gate(axis)
-        return {"enable": (self.wdog.signal, bool), "gate": (gate.output.signal, bool),
-                "pwm_period": (pwm.cycle_out.signal, int), "pwm_on": (pwm.mark_out.signal, int),
-                "pwm_phase": (pwm.phase_out, int)}
+        return PwmPort(enable=self.wdog.signal, gate=gate.output.signal, period_clocks=pwm.cycle_out.signal,
+                       mark_clocks=pwm.mark_out.signal, phase_clocks=pwm.phase_out, clock_hz=Fraction(PWM_CLOCK_HZ))
+
+    def step_dir(self, axis: int) -> StepDirPort:
+        """The step/direction output of stepper axis ``axis`` (ATYPE=35; axes with the feature)."""
+        ax = self.axis(axis)
+        if ax.step is None or ax.dir is None:
+            raise ConfigurationError.out_of_range("step/direction axis", ax.number, _pwm_axes())
+        return StepDirPort(ax.step, ax.dir)
+
+    def outputs(self) -> list[Signal | PulseTrain]:
+        """Every signal the controller drives (:class:`cosim.controllers.Controller`)."""
+        out: list[Signal | PulseTrain] = [self.wdog.signal]
+        for ax in self.axes.values():
+            out += [s for s in (ax.step, ax.dir) if s is not None]
+            if ax.pwm is not None and ax.gate is not None:
+                out += [ax.gate.output.signal, ax.pwm.cycle_out.signal, ax.pwm.mark_out.signal, ax.pwm.phase_out]
+        return out
+
+    def inputs(self) -> list[Signal]:
+        """Every signal the controller reads (none yet: digital inputs arrive with IN(n))."""
+        return []
 
 
 def _pwm_axes() -> str:

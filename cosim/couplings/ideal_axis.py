@@ -1,10 +1,10 @@
-"""A stand-in for a driven axis: counts step pulses and drives switch inputs from the position.
+"""A switch on an ideal axis: step pulses counted as the position, a switch input driven from it.
 
-The simplest plant, for tests without FMUs (:mod:`~cosim.controllers.pokeys.plant` couples the
-Stepper FMU): it subscribes to a step pulse train (one call per slot segment, as the FMU coupling
-does) and sets a switch signal at the
-exact pulse instant at which the axis position enters or leaves a region, with priority
-PLANT_EVENT. The engine sees the change at its next slot start.
+For machines without a plant model on an axis (the Stepper FMU is coupled by
+:mod:`cosim.couplings.stepper`): the axis is taken to follow its step pulses exactly. The
+coupling subscribes to a step pulse train (one call per segment, as the stepper coupling does)
+and sets a switch signal at the exact pulse instant at which the position enters or leaves a
+region, with priority PLANT_EVENT. A PoKeys engine sees the change at its next slot start.
 """
 
 from __future__ import annotations

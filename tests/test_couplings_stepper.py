@@ -17,7 +17,8 @@ import pytest
 from cosim.controllers.pokeys import AXES, SLOT_NS, AxisConfig, EngineConfig, EngineState, PulseEngine, encode_entry
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
-from cosim.controllers.pokeys.plant import couple_stepper, couple_switches
+from cosim.couplings.stepper import couple_stepper
+from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.master import Plant
@@ -41,7 +42,7 @@ def test_three_axis_job_near_25_khz_counters_equal_pulses_and_commanded_steps(si
                                      for _ in AXES))
     engine = PulseEngine(sim, config)
     plants = [stepper(sim, f"stepper_{a}") for a in AXES]
-    couplings = [couple_stepper(sim, engine, i, plant) for i, plant in enumerate(plants)]
+    couplings = [couple_stepper(engine.step_dir(i), plant) for i, plant in enumerate(plants)]
     far = (3_000, -2_250, 1_500)
     counts = plan([Move(far)], config.axes)
     HostApp(sim, engine, to_entries(counts), link="usb", prefill_slots=64)
@@ -69,7 +70,7 @@ def test_three_axis_job_near_25_khz_counters_equal_pulses_and_commanded_steps(si
 def test_constant_count_sets_the_rate_once_and_zero_after_the_last_slot(sim: Simulation) -> None:
     engine = PulseEngine(sim)
     plant = stepper(sim, "stepper_x")
-    coupling = couple_stepper(sim, engine, 0, plant)
+    coupling = couple_stepper(engine.step_dir(0), plant)
     engine.fill_buffer([encode_entry((7, 0, 0))] * 5 + [encode_entry((0, 0, 0)), encode_entry((-3, 0, 0))])
     engine.set_state(EngineState.BUFFER)
     sim.run(until=10 * MS)
@@ -91,6 +92,9 @@ class RecordingPlant:
         self.sim = sim
         self.sets: list[tuple[int, float]] = []
 
+    def variable_names(self) -> list[str]:
+        return ["step_rate", "step_phase", "commanded_steps", "limit_pos"]
+
     def set(self, values: Mapping[str, float]) -> None:
         if "step_rate" in values:
             self.sets.append((self.sim.now, values["step_rate"]))
@@ -101,14 +105,14 @@ class RecordingPlant:
     def read(self, variable: str) -> object:
         return 0
 
-    def watch(self, variable: str) -> Signal:
-        return Signal(self.sim, f"double.x.{variable}")
+    def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
+        return Signal(self.sim, signal or f"double.x.{variable}")
 
 
 def test_without_direction_setup_the_next_slot_continues_the_rate_at_the_same_instant(sim: Simulation) -> None:
     engine = PulseEngine(sim, EngineConfig(dir_setup_ns=0))
     plant = RecordingPlant(sim)
-    couple_stepper(sim, engine, 1, plant)
+    couple_stepper(engine.step_dir(1), plant)
     engine.fill_buffer([encode_entry((0, -25, 0))] * 3 + [encode_entry((0, 2, 0))])
     engine.set_state(EngineState.BUFFER)
     sim.run(until=6 * MS)
@@ -118,7 +122,7 @@ def test_without_direction_setup_the_next_slot_continues_the_rate_at_the_same_in
 def test_inverted_direction_turns_the_motor_the_other_way(sim: Simulation) -> None:
     engine = PulseEngine(sim, EngineConfig(axes=(AxisConfig(invert_direction=True), AxisConfig(), AxisConfig())))
     plant = stepper(sim, "stepper_x")
-    couple_stepper(sim, engine, 0, plant)
+    couple_stepper(engine.step_dir(0), plant)
     engine.fill_buffer([encode_entry((4, 0, 0)), encode_entry((-10, 0, 0))])
     engine.set_state(EngineState.BUFFER)
     sim.run(until=3 * MS)
@@ -137,8 +141,8 @@ def test_limit_trip_from_the_fmu_stops_pulses_at_the_next_slot_boundary(sim: Sim
     x = AxisConfig(max_speed_hz=20_000, accel=1_000_000, decel=1_000_000, limit_pos_enabled=True)
     engine = PulseEngine(sim, EngineConfig(axes=(x, AxisConfig(), AxisConfig())))
     plant = stepper(sim, "stepper_x", limit_pos_position=1_000 * PITCH_M)
-    couple_stepper(sim, engine, 0, plant)
-    couple_switches(plant, engine, 0, ("limit_pos",))
+    couple_stepper(engine.step_dir(0), plant)
+    couple_switches(plant, engine.switch_port(0), variables={"limit_neg": None, "home": None})
     HostApp(sim, engine, to_entries(plan([Move((4_000, 0, 0))], engine.config.axes)), link="usb")
     sim.run(until=200 * MS)
 
@@ -157,19 +161,48 @@ def test_limit_trip_from_the_fmu_stops_pulses_at_the_next_slot_boundary(sim: Sim
     assert int(plant.read("commanded_steps")) == engine.positions[0].value == pulses.size
 
 
-@pytest.mark.parametrize(("kwargs", "message"), [
-    ({"axis": 3}, "axis"),
-    ({"axis": -1}, "axis"),
-])
-def test_bad_axis_is_refused(sim: Simulation, kwargs: dict[str, int], message: str) -> None:
+@pytest.mark.parametrize("axis", [3, -1])
+def test_bad_axis_is_refused(sim: Simulation, axis: int) -> None:
     engine = PulseEngine(sim)
-    plant = stepper(sim, "stepper_x")
-    with pytest.raises(ConfigurationError, match=message):
-        couple_stepper(sim, engine, kwargs["axis"], plant)
-    with pytest.raises(ConfigurationError, match=message):
-        couple_switches(plant, engine, kwargs["axis"])
+    with pytest.raises(ConfigurationError, match=rf"step_dir: axis = {axis} is not allowed \(allowed: 0\.\.2"):
+        engine.step_dir(axis)
+    with pytest.raises(ConfigurationError, match=rf"switch_port: axis = {axis} is not allowed"):
+        engine.switch_port(axis)
 
 
-def test_unknown_switch_output_is_refused(sim: Simulation) -> None:
-    with pytest.raises(ConfigurationError, match=r"switch output.*'torque'.*limit_pos, limit_neg, home"):
-        couple_switches(stepper(sim, "stepper_x"), PulseEngine(sim), 0, ("torque",))
+def test_a_mapping_to_a_variable_the_plant_lacks_names_the_role_and_the_closest_names(sim: Simulation) -> None:
+    engine, plant = PulseEngine(sim), stepper(sim, "stepper_x")
+    with pytest.raises(ConfigurationError, match=r"role 'limit_pos' is mapped to 'torqe', which stepper_x does not "
+                                                 r"have; did you mean torque"):
+        couple_switches(plant, engine.switch_port(0), variables={"limit_pos": "torqe"})
+    with pytest.raises(ConfigurationError, match=r"switch coupling role = 'torque' is not allowed "
+                                                 r"\(allowed: limit_pos, limit_neg, home\)"):
+        couple_switches(plant, engine.switch_port(0), variables={"torque": "torque"})
+    with pytest.raises(ConfigurationError, match=r"role 'step_rate' is required"):
+        couple_stepper(engine.step_dir(0), plant, variables={"step_rate": None})
+
+
+def test_a_plant_with_other_names_is_coupled_through_a_mapping(sim: Simulation) -> None:
+    """The stepper coupling drives any plant whose variables are mapped onto its roles."""
+    engine = PulseEngine(sim, EngineConfig(dir_setup_ns=0))
+    plant = RenamedPlant(sim)
+    couple_stepper(engine.step_dir(1), plant, variables={"step_rate": "rate", "step_phase": "phase",
+                                                         "commanded_steps": None})
+    engine.fill_buffer([encode_entry((0, 4, 0))])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=3 * MS)
+    assert plant.sets == [(0, {"rate": 0.0, "phase": 0.0}), (0, {"rate": 4_000.0}), (1 * MS, {"rate": 0.0})]
+
+
+class RenamedPlant(RecordingPlant):
+    """A plant whose rate input is called ``rate`` (no commanded_steps output)."""
+
+    def __init__(self, sim: Simulation) -> None:
+        super().__init__(sim)
+        self.sets_by_name: list[tuple[int, dict[str, float]]] = []
+
+    def variable_names(self) -> list[str]:
+        return ["rate", "phase"]
+
+    def set(self, values: Mapping[str, float]) -> None:
+        self.sets.append((self.sim.now, dict(values)))  # type: ignore[arg-type]

@@ -1,4 +1,4 @@
-"""Ready-made PMAC set-ups for tests and scenarios (written as the setup text a user keeps).
+"""Ready-made PMAC machines for scenarios and tests (written as the setup text a user keeps).
 
 * :func:`external_time_base` -- Turbo table with a 1/T entry on the master channel and an
   untriggered time-base entry; CS1 follows it (``I5193=@I8002``).
@@ -6,8 +6,11 @@
   registration sensor as capture trigger; CS1 follows it.
 
 Both put motor 1 on axis X of CS1: ideal (act = cmd) by default; with ``slave=MotorModel(...)``
-a PID designed for ``bandwidth_hz`` closes the loop around a :class:`DcMotorStandIn`; with
-``loop=`` a given loop is used and the caller connects ``rig.motor.feedback``.
+a PID designed for ``bandwidth_hz`` closes the loop around a :class:`~cosim.plants.analytic.DcMotor`
+(gain per DAC bit); with ``loop=`` a given loop is used and the caller connects
+``rig.motor.feedback`` (for a Servo plant: :func:`cosim.couplings.servo.connect_servo`).
+The master is any :class:`~cosim.encoders.EncoderSource`: an
+:class:`~cosim.plants.analytic.IdealConveyor` or a :class:`~cosim.couplings.encoder.PlantEncoder`.
 """
 
 from __future__ import annotations
@@ -18,13 +21,14 @@ from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from cosim.controllers.pmac.coord import CoordinateSystem
 from cosim.controllers.pmac.ect import ARMED, FROZEN, RUNNING, TimeBaseEntry, TriggeredTimeBaseEntry
-from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSource
+from cosim.controllers.pmac.encoder import EncoderChannel
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.motion import Item, LinearMove
 from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.servo import MotorModel, PidDesign, PidLoop, design_pid
-from cosim.controllers.pmac.testbench import AnalyticConveyor, DcMotorStandIn
 from cosim.controllers.pmac.units import I10_DEFAULT, IX94_MAX
+from cosim.encoders import EncoderSource
+from cosim.plants.analytic import DcMotor, IdealConveyor
 from cosim.signals import Signal
 from cosim.timebase import Priority
 
@@ -35,6 +39,8 @@ if TYPE_CHECKING:
 MASTER_CHANNEL = 0x078008
 #: Its capture register (dummy-read address): channel + 3.
 MASTER_CAPTURE = MASTER_CHANNEL + 3
+#: A default slave axis: 6 counts/s per DAC bit (about 197 counts/ms at full DAC), tau = 10 ms.
+SERVO_AXIS = MotorModel(gain_counts_per_s_per_bit=6.0, tau_s=0.01)
 
 
 E = TypeVar("E", TimeBaseEntry, TriggeredTimeBaseEntry)
@@ -51,12 +57,12 @@ class Rig(Generic[E]):
     entry: E
     setup: str
     design: PidDesign | None = None
-    plant: DcMotorStandIn | None = None
+    plant: DcMotor | None = None
 
 
 def _finish(sim: Simulation, pmac: Pmac, setup: str, master: EncoderSource, trigger: Signal | None,
             loop: PidLoop | None, slave: MotorModel | None, bandwidth_hz: float
-            ) -> tuple[CoordinateSystem, Motor, EncoderChannel, PidDesign | None, DcMotorStandIn | None]:
+            ) -> tuple[CoordinateSystem, Motor, EncoderChannel, PidDesign | None, DcMotor | None]:
     channel = pmac.add_channel(MASTER_CHANNEL, master, trigger=trigger, name="master")
     pmac.load_setup(setup, source="rig setup")
     cs = pmac.coordinate_system(1)
@@ -64,8 +70,9 @@ def _finish(sim: Simulation, pmac: Pmac, setup: str, master: EncoderSource, trig
     motor = pmac.add_motor(1, cs=1, loop=PidLoop(design) if design is not None else loop)
     plant = None
     if slave is not None:
-        plant = DcMotorStandIn(sim, motor.dac, slave)
-        motor.feedback = plant.encoder_count
+        slave_plant = plant = DcMotor(sim, gain=slave.gain_counts_per_s_per_bit, tau_s=slave.tau_s)
+        slave_plant.drive("command", motor.dac)
+        motor.feedback = lambda: slave_plant.read("encoder_count")
     return cs, motor, channel, design, plant
 
 
@@ -130,7 +137,7 @@ def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: 
 
 
 def stale_capture(sim: Simulation, *, t_freeze_ns: int, arm_after_ns: int,
-                  dummy_read: bool) -> tuple[AnalyticConveyor, Rig[TriggeredTimeBaseEntry]]:
+                  dummy_read: bool) -> tuple[IdealConveyor, Rig[TriggeredTimeBaseEntry]]:
     """The stale-capture set-up of the manual's warning, started.
 
     A 64 counts/ms belt with marks at 500 and 1500 counts; the triggered entry is left running,
@@ -138,7 +145,7 @@ def stale_capture(sim: Simulation, *, t_freeze_ns: int, arm_after_ns: int,
     servo interrupt at or after ``t_freeze_ns`` and the PLC arms it ``arm_after_ns`` later
     (:func:`freeze_then_arm`); with ``dummy_read`` the program reads the capture register.
     """
-    belt = AnalyticConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
+    belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
     rig = triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
     clock = rig.pmac.clock
     t_freeze = clock.t_ns(clock.first_cycle_at_or_after(t_freeze_ns)) + 1_000

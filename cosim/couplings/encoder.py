@@ -1,0 +1,109 @@
+"""A plant's encoder and registration-mark outputs as a controller's encoder input and trigger.
+
+A controller reads an encoder through :class:`~cosim.encoders.EncoderSource`. :class:`PlantEncoder`
+is one over a plant that publishes its encoder as outputs (the Conveyor and Servo FMUs): it reads
+them at the instant the controller samples (reading advances the plant to now) and converts the
+edge instants [s] to ticks once, here, with
+:meth:`~cosim.timebase.TimeBase.ticks_from_seconds_ceil` (the first tick at or after the edge:
+the tick from which the new count is visible). :func:`watch_mark` publishes a registration
+sensor as the bit signal a capture input takes.
+
+Encoder roles (Conveyor/Servo FMU names as defaults): ``count`` (``encoder_count``),
+``direction`` (``edge_direction``), ``t_last_edge`` and ``t_prev_edge`` [s]. Mark role: ``mark``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from fractions import Fraction
+
+from cosim.couplings.roles import required, resolve
+from cosim.encoders import EncoderSample, extend_one_over_t
+from cosim.errors import ConfigurationError
+from cosim.master import PlantLike
+from cosim.signals import Signal
+
+ROLES: dict[str, str | None] = {"count": "encoder_count", "direction": "edge_direction",
+                                "t_last_edge": "t_last_edge", "t_prev_edge": "t_prev_edge"}
+"""Encoder roles and the Conveyor/Servo FMU outputs that play them."""
+MARK_ROLES: dict[str, str | None] = {"mark": "mark"}
+"""Registration-mark role and the Conveyor FMU output that plays it."""
+
+
+class PlantEncoder:
+    """An :class:`~cosim.encoders.EncoderSource` over a plant's encoder outputs.
+
+    Parameters
+    ----------
+    plant : PlantLike
+        A Conveyor or Servo plant (or any plant with the roles of :data:`ROLES`).
+    start : int, optional
+        The plant's start time [ticks] (default: now; build the adapter right after loading the
+        plant). The FMUs report the start time as edge instant before there were edges; such an
+        instant is taken as "no edge yet", so the 1/T extension only uses real edges.
+    variables : mapping role -> variable, optional
+        The plant's names for the roles, where they differ.
+
+    Notes
+    -----
+    ``sample(t)`` may only be called at ``t == sim.now``: the plant is read at the instant the
+    controller samples it (the servo interrupt, or a capture trigger).
+    """
+
+    def __init__(self, plant: PlantLike, *, start: int | None = None,
+                 variables: Mapping[str, str | None] | None = None) -> None:
+        self.plant = plant
+        self.sim = plant.sim
+        self.start = self.sim.now if start is None else start
+        names = resolve(plant, "encoder", ROLES, variables)
+        self._count, self._direction = required(names, "count"), required(names, "direction")
+        self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
+
+    def _edge(self, t_s: float) -> int | None:
+        t = self.sim.timebase.ticks_from_seconds_ceil(float(t_s))
+        return t if t > self.start else None
+
+    def sample(self, t: int) -> EncoderSample:
+        """Count, last two edge instants [ticks] and direction of the plant's encoder now."""
+        if t != self.sim.now:
+            raise ConfigurationError.out_of_range("t of PlantEncoder.sample", t,
+                                                  f"the current time {self.sim.now} (a plant is read now)")
+        read = self.plant.read
+        last = self._edge(read(self._last))
+        prev = self._edge(read(self._prev)) if last is not None else None
+        direction = 1 if int(read(self._direction)) >= 0 else -1
+        return EncoderSample(int(read(self._count)), last, prev, direction)
+
+    def position(self, *, fraction_bits: int = 5) -> Fraction:
+        """1/T-extended position now [counts], truncated to ``2^-fraction_bits`` count."""
+        now = self.sim.now
+        return Fraction(extend_one_over_t(self.sample(now), now, fraction_bits), 1 << fraction_bits)
+
+
+def watch_mark(plant: PlantLike, *, signal: str | None = None,
+               variables: Mapping[str, str | None] | None = None) -> Signal:
+    """The plant's registration sensor as a bit signal changing at its exact (tick-ceiled) edges.
+
+    Parameters
+    ----------
+    plant : PlantLike
+        A Conveyor plant loaded from its FMI 3.0 build (early return locates the mark edges), or
+        an analytic plant whose mark is exact by construction.
+    signal : str, optional
+        Signal name (default ``<plant>.mark``).
+    variables : mapping role -> variable, optional
+        The plant's name for ``mark``.
+
+    Raises
+    ------
+    ConfigurationError
+        If the plant is an FMU that is not FMI 3.0 with early return (FMI 2.0 would publish the
+        mark only at the end of a step, up to a servo period late).
+    """
+    fmu = getattr(plant, "fmu", None)
+    version = getattr(fmu, "fmi_version", None)
+    if fmu is not None and not (version == 3 and getattr(fmu, "early_return", False)):
+        raise ConfigurationError.out_of_range(f"FMI version of {plant.name} for the capture trigger", version,
+                                              "3 (FMI 3.0 with early return, to locate mark edges exactly)")
+    names = resolve(plant, "mark", MARK_ROLES, variables)
+    return plant.watch(required(names, "mark"), signal=signal)
