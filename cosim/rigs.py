@@ -110,13 +110,13 @@ def triggered_time_base(sim: Simulation, master: EncoderSource, trigger: Signal,
     return Rig(pmac, cs, motor, channel, entry, setup, design, plant)
 
 
-def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: list[Item], *, t_freeze_ns: int,
-                    arm_after_ns: int, dummy_read: bool) -> None:
+def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: list[Item], *, t_freeze: int,
+                    arm_after: int, dummy_read: bool) -> None:
     """The manual's triggered-move recipe, as host actions (priority HOST).
 
-    At ``t_freeze_ns`` the motion program freezes the entry (``I8000=$978008``), optionally does
+    At ``t_freeze`` the motion program freezes the entry (``I8000=$978008``), optionally does
     the dummy read of the capture register (``X:$07800B``), and starts ``program``. After
-    ``arm_after_ns`` the PLC arms the entry if it is still frozen (``IF (I8000=$978008)
+    ``arm_after`` the PLC arms the entry if it is still frozen (``IF (I8000=$978008)
     I8000=$B78008``). If both fall between the same two servo interrupts and there is no dummy
     read, no servo cycle sees the entry frozen: the stale-capture hazard.
     """
@@ -124,32 +124,32 @@ def freeze_then_arm(sim: Simulation, rig: Rig[TriggeredTimeBaseEntry], program: 
     armed = (ARMED << 20) | MASTER_CHANNEL
 
     def motion_program_and_plc() -> Generator[Any, Any, None]:
-        yield sim.at(t_freeze_ns, Priority.HOST)
+        yield sim.at(t_freeze, Priority.HOST)
         rig.pmac.set_ivar(8000, frozen)
         if dummy_read:
             rig.pmac.read_x(MASTER_CAPTURE)
         rig.cs.run_program(program)
-        yield sim.at(t_freeze_ns + arm_after_ns, Priority.HOST)
+        yield sim.at(t_freeze + arm_after, Priority.HOST)
         if rig.pmac.get_ivar(8000) == frozen:
             rig.pmac.set_ivar(8000, armed)
 
     sim.process(motion_program_and_plc())
 
 
-def stale_capture(sim: Simulation, *, t_freeze_ns: int, arm_after_ns: int,
+def stale_capture(sim: Simulation, *, t_freeze: int, arm_after: int,
                   dummy_read: bool) -> tuple[IdealConveyor, Rig[TriggeredTimeBaseEntry]]:
     """The stale-capture set-up of the manual's warning, started.
 
     A 64 counts/ms belt with marks at 500 and 1500 counts; the triggered entry is left running,
     so mark 1's capture is never read. The motion program freezes the entry 1 us after the first
-    servo interrupt at or after ``t_freeze_ns`` and the PLC arms it ``arm_after_ns`` later
+    servo interrupt at or after ``t_freeze`` and the PLC arms it ``arm_after`` later
     (:func:`freeze_then_arm`); with ``dummy_read`` the program reads the capture register.
     """
     belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
     rig = triggered_time_base(sim, belt, belt.mark, scale_factor=256, method=RUNNING)
     clock = rig.pmac.clock
-    t_freeze = clock.t_ns(clock.first_cycle_at_or_after(t_freeze_ns)) + 1_000
-    freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze_ns=t_freeze, arm_after_ns=arm_after_ns,
+    t_freeze = clock.t(clock.first_cycle_at_or_after(t_freeze)) + sim.ticks(1, "us")
+    freeze_then_arm(sim, rig, [LinearMove(3000, 64_000, 10)], t_freeze=t_freeze, arm_after=arm_after,
                     dummy_read=dummy_read)
     rig.pmac.start()
     return belt, rig

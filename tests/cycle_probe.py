@@ -22,7 +22,7 @@ def record_each_cycle(sim: Simulation, clock: ServoClock, probe: Callable[[int, 
 
     def sample() -> Generator[Any, Any, None]:
         for k in range(clock.first_cycle_at_or_after(sim.now), cycles):
-            t = clock.t_ns(k)
+            t = clock.t(k)
             yield sim.at(t, Priority.SAMPLE)
             results.append(probe(k, t))
 

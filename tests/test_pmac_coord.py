@@ -44,7 +44,7 @@ def test_ix94_at_max_with_smoothly_varying_master_gives_no_slip(sim: Simulation)
     rows = record_each_cycle(sim, clock, lambda k, t: (rig.motor.cmd, rig.pmac.table.entry_at(0x3501).position,  # type: ignore[union-attr]
                                                        belt.position(t)), cycles=150)
     rig.pmac.start()
-    sim.run(until=clock.t_ns(150))
+    sim.run(until=clock.t(150))
     start32 = rows[0][1]
     for cmd, pos32, true_pos in rows[1:]:
         master_elapsed = 2 * 2048 * (pos32 - start32)  # 2^-23 ms: the master-derived time
@@ -71,7 +71,7 @@ def test_ix94_low_during_fast_master_acceleration_reports_slip(sim: Simulation) 
     rows = record_each_cycle(sim, clock, lambda k, t: (rig.cs.actual, rig.pmac.table.entry_at(0x3501).position),  # type: ignore[union-attr]
                              cycles=400)
     rig.pmac.start()
-    sim.run(until=clock.t_ns(400))
+    sim.run(until=clock.t(400))
     cs = rig.cs
     # accounting from independent registers: master travel (1/T entry) minus elapsed program time
     master_counts = Fraction(rows[-1][1] - rows[1][1], 32)
@@ -91,7 +91,7 @@ def test_ix94_low_during_fast_master_acceleration_reports_slip(sim: Simulation) 
     assert abs(slip / estimate - 1) < Fraction(10, 100)
     assert cs.ideal_position("X") - cs.position("X") == pytest.approx(float(slip), abs=0.1)  # 1 count/count
     t, v = sim.trace.edges("pmac.cs1.ix94_active")
-    assert t.tolist() == [0, clock.t_ns(2), clock.t_ns(cycles[-1] + 1)]
+    assert t.tolist() == [0, clock.t(2), clock.t(cycles[-1] + 1)]
     assert v.tolist() == [0, 1, 0]
     _ts, vs = sim.trace.edges("pmac.cs1.slip")
     assert vs[-1] == int(slip)
@@ -112,12 +112,12 @@ def test_host_percent_slews_at_ix94_per_cycle(sim: Simulation) -> None:
     rows = record_each_cycle(sim, pmac.clock, lambda k, t: cs.actual, cycles=2300)
 
     def host() -> Generator[Any, Any, None]:
-        yield sim.at(pmac.clock.t_ns(10) + 1, Priority.HOST)
+        yield sim.at(pmac.clock.t(10) + 1, Priority.HOST)
         assert pmac.command_percent(1, 100) == I10_DEFAULT
 
     sim.process(host())
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(2300))
+    sim.run(until=pmac.clock.t(2300))
     assert rows[:11] == [0] * 11
     assert rows[11:14] == [1644, 3288, 4932]
     n = -(-I10_DEFAULT // 1644)  # 2259 cycles
@@ -131,7 +131,7 @@ def test_percent_register_is_ignored_under_external_time_base(sim: Simulation) -
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, i10=2**21)
     rig.pmac.command_percent(1, 10)
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(5) + 1)
+    sim.run(until=rig.pmac.clock.t(5) + 1)
     assert rig.cs.percent == 75  # follows the master at 3/4 of the real-time input frequency
     assert rig.cs.percent_register.value == 2**21 // 10
 
@@ -166,7 +166,7 @@ def test_delay_runs_with_time_base_but_dwell_in_real_time(sim: Simulation) -> No
     cs.run_program([Delay(10), LinearMove(1, 1000, 0), Dwell(10), LinearMove(2, 1000, 0)])
     rows = record_each_cycle(sim, pmac.clock, lambda k, t: cs.position("X"), cycles=140)
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(140))
+    sim.run(until=pmac.clock.t(140))
     first_move = next(k for k, x in enumerate(rows) if x > 0)
     assert first_move == 81  # cycle 1 starts; 80 cycles of 125 us program time = 10 ms
     reached_1 = rows.index(Fraction(1))
@@ -187,7 +187,7 @@ def test_time_base_overrun_carries_into_the_next_segment(sim: Simulation) -> Non
     cs.run_program([Delay(Fraction(1, 10)), LinearMove(10, 1000, 0)])
     rows = record_each_cycle(sim, pmac.clock, lambda k, t: cs.position("X"), cycles=4)
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(4))
+    sim.run(until=pmac.clock.t(4))
     assert rows == [0, Fraction(3, 20), Fraction(2, 5), Fraction(13, 20)]
 
 
@@ -196,7 +196,7 @@ def test_dwell_under_external_time_base_is_reported(sim: Simulation) -> None:
     rig = rigs.external_time_base(sim, belt, scale_factor=2048)
     rig.cs.run_program([Dwell(1), MOVE])
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(10))
+    sim.run(until=rig.pmac.clock.t(10))
     assert any("DWELL under external time base" in note for _, note in rig.cs.notes)
 
 
@@ -206,9 +206,9 @@ def test_jog_runs_under_the_time_base(sim: Simulation) -> None:
     pmac.command_percent(1, 25)
     cs.jog(10, speed_per_ms=1, ta_ms=0)  # 10 ms at 100 %: 40 ms at 25 %
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(80) + 1)
+    sim.run(until=pmac.clock.t(80) + 1)
     assert cs.position("X") == 5  # cycles 1..80, 62.5 us of program time each, at 1 unit/ms
-    sim.run(until=pmac.clock.t_ns(200))
+    sim.run(until=pmac.clock.t(200))
     assert cs.position("X") == 10 and cs.program_done
 
 
@@ -231,7 +231,7 @@ def test_ix93_1833_selects_the_default_pmac_table_time_base(sim: Simulation) -> 
     cs = pmac.coordinate_system(1)
     assert cs.external and cs.describe_source() == "$0729 (external time base)"
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(3) + 1)
+    sim.run(until=pmac.clock.t(3) + 1)
     assert cs.percent == 75
 
 

@@ -55,7 +55,7 @@ def test_time_base_value_equals_formula_in_register_units(
     rig = rigs.external_time_base(sim, belt, scale_factor=scale_factor, i10=I10_250US)
     values = record_each_cycle(sim, rig.pmac.clock, lambda k, t: rig.entry.result, cycles=20)
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(20))
+    sim.run(until=rig.pmac.clock.t(20))
     register = Fraction(expected_pct) * I10_250US / 100
     assert register.denominator == 1
     assert values == [0] + [int(register)] * 19
@@ -70,13 +70,13 @@ def test_default_i10_time_base_averages_exactly_and_jitters_by_one_lsb(sim: Simu
     clock = rig.pmac.clock
     rows = record_each_cycle(sim, clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=200)
     rig.pmac.start()
-    sim.run(until=clock.t_ns(200))
+    sim.run(until=clock.t(200))
     ideal = formula_percent(2048, 64) * I10_DEFAULT / 100
     assert ideal == I10_DEFAULT
     assert all(abs(value - ideal) < 2 * 2048 for value, _ in rows[1:])
     assert {value for value, _ in rows[1:]} == {3_710_976, 3_715_072}  # 906 or 907 /32 counts, times 4096
     assert sum(v for v, _ in rows) == 2 * 2048 * (rows[-1][1] - rows[0][1])
-    exact_travel = belt.position(clock.t_ns(199)) - belt.position(0)
+    exact_travel = belt.position(clock.t(199)) - belt.position(0)
     assert abs(Fraction(rows[-1][1] - rows[0][1], 32) - exact_travel) < Fraction(1, 32)
 
 
@@ -86,7 +86,7 @@ def test_triggered_entry_running_gives_the_same_percent_with_one_eighth_sf(sim: 
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=64, method=RUNNING, i10=I10_250US)
     values = record_each_cycle(sim, rig.pmac.clock, lambda k, t: rig.entry.result, cycles=10)
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(10))
+    sim.run(until=rig.pmac.clock.t(10))
     assert values == [0] + [I10_250US] * 9
     assert formula_percent(64, 256, triggered=True) == 100
 
@@ -95,7 +95,7 @@ def test_result_saturates_at_24_bits(sim: Simulation) -> None:
     belt = IdealConveyor(sim, speed_counts_per_ms=1024)
     rig = rigs.external_time_base(sim, belt, scale_factor=8192, i10=I10_250US)  # 4096 %: too big
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(3) + 1)
+    sim.run(until=rig.pmac.clock.t(3) + 1)
     assert rig.entry.result == 2**23 - 1
     assert rig.entry.saturated_cycles == [1, 2, 3]
 
@@ -112,7 +112,7 @@ def test_table_runs_top_to_bottom_so_a_later_source_is_one_cycle_old(sim: Simula
     clock = ServoClock(I10_250US)
     results = []
     for k in range(4):
-        table.run(clock.t_ns(k), k)
+        table.run(clock.t(k), k)
         results.append((table.x_word(early.result_address), table.x_word(late.result_address)))
     tb = 2 * 2048 * 16 * 32
     assert results == [(0, 0), (0, tb), (tb, tb), (tb, tb)]
@@ -130,9 +130,9 @@ def test_triggered_states_frozen_and_armed_output_zero(sim: Simulation) -> None:
     rig = rigs.triggered_time_base(sim, belt, belt.mark, scale_factor=64, method=FROZEN, i10=I10_250US)
     rows = record_each_cycle(sim, rig.pmac.clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=6)
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(3) + 1)
+    sim.run(until=rig.pmac.clock.t(3) + 1)
     rig.entry.set_method(ARMED)
-    sim.run(until=rig.pmac.clock.t_ns(6))
+    sim.run(until=rig.pmac.clock.t(6))
     assert rows == [(0, 256 * 64 * k) for k in range(6)]
     assert rig.entry.state == "armed" and rig.entry.starts == []
 
@@ -185,6 +185,6 @@ def test_24_bit_position_wrap_does_not_disturb_the_time_base(sim: Simulation) ->
     rig = rigs.external_time_base(sim, belt, scale_factor=2048, i10=I10_250US)
     rows = record_each_cycle(sim, rig.pmac.clock, lambda k, t: (rig.entry.result, rig.entry.position), cycles=20)
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(20))
+    sim.run(until=rig.pmac.clock.t(20))
     assert rows[0][1] > rows[-1][1]  # the source register wrapped
     assert [r for r, _ in rows] == [0] + [I10_250US] * 19

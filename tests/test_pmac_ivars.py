@@ -76,7 +76,7 @@ def test_manual_example_loads_into_the_machine(sim: Simulation) -> None:
     assert pmac.get_ivar(5193) == pmac.get_ivar(193) == 0x350A
     assert pmac.coordinate_system(1).ix94 == 8_388_607
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(5) + 1)
+    sim.run(until=pmac.clock.t(5) + 1)
     assert abs(pmac.coordinate_system(1).percent - 100) <= Fraction(100 * 2 * 64, 3_713_707)  # one 1/256 count
 
 
@@ -85,7 +85,7 @@ def test_setup_with_an_untriggered_entry_and_pmac_style_numbers(sim: Simulation)
     pmac.add_channel(0x078000, IdealConveyor(sim, speed_counts_per_ms=48))
     pmac.load_setup("I8000=$078000\nI8001=$403501\nI8002=2048\nI193=$3503 I194=8388607\n")
     pmac.start()
-    sim.run(until=pmac.clock.t_ns(4) + 1)
+    sim.run(until=pmac.clock.t(4) + 1)
     assert pmac.coordinate_system(1).source_value in (2_781_184, 2_785_280)  # 75 % within one 1/32 count
 
 

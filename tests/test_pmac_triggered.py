@@ -49,21 +49,21 @@ def test_triggered_start_time_zero_is_master_position_at_trigger(sim: Simulation
     sim.process(plc())
     rows = record_each_cycle(sim, clock, lambda k, t: (t, rig.motor.cmd, rig.entry.position), cycles=80)
     rig.pmac.start()
-    sim.run(until=clock.t_ns(80))
+    sim.run(until=clock.t(80))
     (start,) = rig.entry.starts
     t_mark = belt.mark_times[0][0]
-    assert start.capture_t_ns == t_mark == 15_629_688  # ceil(1000.3 * 15625)
+    assert start.capture_t == t_mark == 15_629_688  # ceil(1000.3 * 15625)
     assert abs(Fraction(start.time_zero_pos256, 256) - belt.position(t_mark)) <= Fraction(1, 256)
-    assert start.t_ns == clock.t_ns(clock.first_cycle_at_or_after(t_mark))  # seen at the next servo cycle
+    assert start.t == clock.t(clock.first_cycle_at_or_after(t_mark))  # seen at the next servo cycle
     assert rig.entry.method == RUNNING
     (segment,) = compile_items([MOVE], {"X": Fraction(0)})
     for t, cmd, pos256 in rows:
-        if t < start.t_ns:
+        if t < start.t:
             assert cmd == 0
         else:  # program time = master travel since the mark / 64 counts per ms, exactly
             assert cmd == segment.position(Fraction(2 * 256 * (pos256 - start.time_zero_pos256), 2**23))
     times, values = sim.trace.edges("pmac.ect.method")
-    assert times.tolist() == [0, 2_000_000, start.t_ns] and values.tolist() == [FROZEN, ARMED, RUNNING]
+    assert times.tolist() == [0, 2_000_000, start.t] and values.tolist() == [FROZEN, ARMED, RUNNING]
 
 
 def test_stale_capture_starts_motion_at_the_wrong_master_position(sim: Simulation) -> None:
@@ -77,15 +77,15 @@ def test_stale_capture_starts_motion_at_the_wrong_master_position(sim: Simulatio
         freeze/arm                     ^^ (same interval)
         start                              ^ wrong: master at ~820, mark 2 at 1500
     """
-    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=100_000, dummy_read=False)
+    belt, rig = rigs.stale_capture(sim, t_freeze=12_000_000, arm_after=100_000, dummy_read=False)
     clock = rig.pmac.clock
     k = clock.first_cycle_at_or_after(12_000_000)
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
-    assert start.capture_t_ns == belt.mark_times[0][0]  # the stale capture of mark 1
+    assert start.capture_t == belt.mark_times[0][0]  # the stale capture of mark 1
     assert Fraction(start.time_zero_pos256, 256) == 500
-    assert start.t_ns == clock.t_ns(k + 1) < belt.mark_times[1][0]  # started long before mark 2
-    start_error = belt.position(start.t_ns) - 1500
+    assert start.t == clock.t(k + 1) < belt.mark_times[1][0]  # started long before mark 2
+    start_error = belt.position(start.t) - 1500
     assert start_error < -650  # the motion begins about 680 counts early
     assert rig.entry.saturated_cycles == [k + 1]  # 300 counts of travel in one cycle: the result clips
 
@@ -93,24 +93,24 @@ def test_stale_capture_starts_motion_at_the_wrong_master_position(sim: Simulatio
 def test_dummy_read_of_capture_register_fixes_the_stale_start(sim: Simulation) -> None:
     """Same timing, plus a dummy read of X:$07800B after freezing: the flag is cleared, the armed
     entry waits for mark 2 and starts there within 1/256 count."""
-    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=100_000, dummy_read=True)
+    belt, rig = rigs.stale_capture(sim, t_freeze=12_000_000, arm_after=100_000, dummy_read=True)
     clock = rig.pmac.clock
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
     t_mark2 = belt.mark_times[1][0]
-    assert start.capture_t_ns == t_mark2
+    assert start.capture_t == t_mark2
     assert abs(Fraction(start.time_zero_pos256, 256) - belt.position(t_mark2)) <= Fraction(1, 256)
-    assert start.t_ns == clock.t_ns(clock.first_cycle_at_or_after(t_mark2))
+    assert start.t == clock.t(clock.first_cycle_at_or_after(t_mark2))
     assert rig.entry.saturated_cycles == []
 
 
 def test_a_servo_cycle_in_frozen_state_also_clears_the_stale_capture(sim: Simulation) -> None:
     """Without the dummy read but with the arm two servo cycles after the freeze, the table reads the
     capture register while frozen and the start is correct (the hazard needs a light load)."""
-    belt, rig = rigs.stale_capture(sim, t_freeze_ns=12_000_000, arm_after_ns=1_000_000, dummy_read=False)
+    belt, rig = rigs.stale_capture(sim, t_freeze=12_000_000, arm_after=1_000_000, dummy_read=False)
     sim.run(until=30_000_000)
     (start,) = rig.entry.starts
-    assert start.capture_t_ns == belt.mark_times[1][0]
+    assert start.capture_t == belt.mark_times[1][0]
 
 
 def test_mark_under_the_sensor_at_the_trigger_cycle_recaptures(sim: Simulation) -> None:
@@ -120,14 +120,14 @@ def test_mark_under_the_sensor_at_the_trigger_cycle_recaptures(sim: Simulation) 
     rig.pmac.start()
     sim.run(until=20_000_000)
     (start,) = rig.entry.starts
-    assert [t for t, _ in rig.channel.captures] == [belt.mark_times[0][0], start.t_ns]
+    assert [t for t, _ in rig.channel.captures] == [belt.mark_times[0][0], start.t]
     assert rig.channel.capture_flag
 
 
 def test_master_position_signal_is_the_undifferentiated_1_256_position(sim: Simulation) -> None:
     rig, belt = _setup(sim, initial=FROZEN, marks=[])
     rig.pmac.start()
-    sim.run(until=rig.pmac.clock.t_ns(10) + 1)
+    sim.run(until=rig.pmac.clock.t(10) + 1)
     t, v = sim.trace.edges("pmac.ect.master_pos")
     for ti, vi in zip(t[1:], v[1:], strict=True):
         assert 0 <= belt.position(int(ti)) - Fraction(vi) < Fraction(1, 256)

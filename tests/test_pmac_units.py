@@ -29,20 +29,28 @@ def test_default_servo_interrupts_are_floor_of_exact_instants() -> None:
     clock = ServoClock()
     assert clock.i10 == I10_DEFAULT
     assert clock.period_ns == Fraction(3_713_707 * 10**6, 2**23)
-    assert [clock.t_ns(k) for k in range(4)] == [0, 442_708, 885_416, 1_328_125]
-    assert {clock.t_ns(k + 1) - clock.t_ns(k) for k in range(1000)} == {442_708, 442_709}
+    assert [clock.t(k) for k in range(4)] == [0, 442_708, 885_416, 1_328_125]
+    assert {clock.t(k + 1) - clock.t(k) for k in range(1000)} == {442_708, 442_709}
 
 
 def test_servo_clock_never_drifts_from_real_time() -> None:
     """After a million cycles the interrupt is still within 1 ns of k * period (no accumulation)."""
     clock = ServoClock()
     for k in (10**3, 10**6, 10**9):
-        assert 0 <= k * clock.period_ns - clock.t_ns(k) < 1
+        assert 0 <= k * clock.period_ns - clock.t(k) < 1
+
+
+def test_servo_clock_at_10_ns_resolution_floors_the_same_instants_to_10_ns_ticks() -> None:
+    """I10 = 3,713,707 is 442,708.37 ns: at 10 ns per tick the interrupts fall on 44,270, 88,541, ... ticks."""
+    clock = ServoClock(ns_per_tick=Fraction(10))
+    assert [clock.t(k) for k in range(4)] == [0, 44_270, 88_541, 132_812]
+    assert clock.period_ticks == Fraction(3_713_707 * 10**6, 2**23 * 10)
+    assert clock.first_cycle_at_or_after(44_271) == 2
 
 
 def test_servo_clock_offset_and_cycle_lookup() -> None:
-    clock = ServoClock(t0_ns=1000)
-    assert clock.t_ns(0) == 1000 and clock.t_ns(1) == 443_708
+    clock = ServoClock(t0=1000)
+    assert clock.t(0) == 1000 and clock.t(1) == 443_708
     assert clock.first_cycle_at_or_after(1000) == 0
     assert clock.first_cycle_at_or_after(1001) == 1
     assert clock.first_cycle_at_or_after(443_708) == 1
@@ -51,7 +59,7 @@ def test_servo_clock_offset_and_cycle_lookup() -> None:
 
 def test_exact_period_from_ns_and_refusal_of_inexact() -> None:
     assert ServoClock.from_period_ns(250_000).i10 == 2**21
-    assert ServoClock.from_period_ns(250_000).t_ns(3) == 750_000
+    assert ServoClock.from_period_ns(250_000).t(3) == 750_000
     with pytest.raises(ConfigurationError,
                        match=r"servo period_ns = 442708 is not allowed \(allowed: multiples of 15625"):
         ServoClock.from_period_ns(442_708)

@@ -172,7 +172,7 @@ def test_pwm_registers_are_16_bit(sim: Simulation, name: str, value: object, all
 
 
 def test_carrier_edges_closed_form() -> None:
-    t, v = carrier_edges(10_000, 130_000, cycle=1000, mark=400, phase=0)
+    t, v = carrier_edges(10_000, 130_000, cycle=1000, mark=400, clock_ticks=50, phase=0)
     assert t.tolist() == [10_000, 20_000, 50_000, 70_000, 100_000, 120_000]
     assert v.tolist() == [1, 0, 1, 0, 1, 0]
-    assert carrier_edges(0, 10, cycle=1000, mark=400, enabled=False)[1].tolist() == [0]
+    assert carrier_edges(0, 10, cycle=1000, mark=400, clock_ticks=50, enabled=False)[1].tolist() == [0]

@@ -81,7 +81,7 @@ def scenario(run: Run) -> None:
     times_s, _rising = mark_edge_times(belt, speed_cmd=speed_m_s, t_end_s=sim.timebase.seconds(run.until))
     t_mark = sim.timebase.ticks_from_seconds_ceil(float(times_s[0]))
     mark_pos = p.mark_offset_m * belt.counts_per_metre  # the belt position at the mark's leading edge
-    period = -(-rig.pmac.clock.period_ns // 1)
+    period = -(-rig.pmac.clock.period_ticks // 1)
     quantum = 100 * 2 * scale_factor / rig.pmac.i10  # one 1/256 count per cycle, in %
     run.check(ValueAt("conveyor.mark", t_mark - 2, 0, name="mark off 2 ns before its closed-form instant"))
     run.check(ValueAt("conveyor.mark", t_mark + 1, 1, name="mark on within 1 ns of its closed-form instant"))

@@ -36,8 +36,8 @@ UNTIL = "300 ms"
 def scenario(run: Run) -> None:
     sim, p = run.sim, run.p
     rtif = Fraction(p.rtif)
-    accel_ns = sim.ticks(p.accel_ms, "ms")
-    belt = IdealConveyor(sim, phases=[(accel_ns, rtif / p.accel_ms)])
+    accel_ticks = sim.ticks(p.accel_ms, "ms")
+    belt = IdealConveyor(sim, phases=[(accel_ticks, rtif / p.accel_ms)])
     sf = scale_factor_for(rtif)
     rig = rigs.external_time_base(sim, belt, scale_factor=sf, ix94=p.ix94)
     rig.cs.run_program([LinearMove(10**7, rtif * 1000, 10)])
@@ -45,7 +45,7 @@ def scenario(run: Run) -> None:
 
     i10 = rig.pmac.i10
     clock = rig.pmac.clock
-    ramp_cycles = Fraction(accel_ns) / clock.period_ns
+    ramp_cycles = Fraction(accel_ticks) / clock.period_ticks
     # master counts: the area between the Ix94 ramp and the source's ramp (none if Ix94 keeps up)
     estimate = max(Fraction(0), Fraction(i10, 2) * (Fraction(i10, p.ix94) - ramp_cycles) / (64 * sf))
     run.check(ValueAt("pmac.cs1.slip", None, float(estimate), tol=max(1.0, float(p.slip_tol * estimate)),
@@ -53,7 +53,8 @@ def scenario(run: Run) -> None:
     if estimate > 0:
         limit_cycles = Fraction(i10, p.ix94) - ramp_cycles / 2
         run.check(Duration(EdgeRef("pmac.cs1.ix94_active", 1), EdgeRef("pmac.cs1.ix94_active", 0),
-                           equals=int(limit_cycles * clock.period_ns), tol=int(limit_cycles * clock.period_ns / 10),
+                           equals=int(limit_cycles * clock.period_ticks),
+                           tol=int(limit_cycles * clock.period_ticks / 10),
                            name="Ix94 acts for about I10/Ix94 cycles"))
     else:
         run.check(IntervalsAbove("pmac.cs1.ix94_active", 0.5, name="Ix94 fast enough: the limit never acts"))

@@ -55,10 +55,10 @@ def scenario(run: Run) -> None:
     k_up = clock.first_cycle_at_or_after(sim.ticks(p.t_up_ms, "ms"))
     k_down = clock.first_cycle_at_or_after(sim.ticks(p.t_down_ms, "ms"))
     run.check(Duration(EdgeRef("pmac.cs1.timebase_source", i10, which="first"), EdgeRef("pmac.cs1.timebase", i10),
-                       equals=clock.t_ns(k_up + up_cycles - 1) - clock.t_ns(k_up),
+                       equals=clock.t(k_up + up_cycles - 1) - clock.t(k_up),
                        name="0 -> 100 % in ceil(I10 / Ix94) servo cycles"))
     run.check(Duration(EdgeRef("pmac.cs1.timebase_source", half), EdgeRef("pmac.cs1.timebase", half),
-                       equals=clock.t_ns(k_down + down_cycles - 1) - clock.t_ns(k_down),
+                       equals=clock.t(k_down + down_cycles - 1) - clock.t(k_down),
                        name="100 -> 50 % in ceil(I10 / 2 / Ix94) servo cycles"))
     run.check(ValueAt("pmac.cs1.timebase_pct", sim.ticks(p.t_down_ms, "ms") - 1, 100, name="100 % before %50"))
     run.check(ValueAt("pmac.cs1.timebase_pct", None, float(100 * half / i10), name="50 % at the end"))

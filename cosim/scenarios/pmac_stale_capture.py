@@ -38,8 +38,8 @@ def stale_capture_run(run: Run, *, dummy_read: bool) -> tuple[IdealConveyor, Rig
     """The set-up and the time-zero error figure (shared with ``pmac_stale_capture_fix``); returns
     the belt, the rig and the instant of mark 2."""
     sim, p = run.sim, run.p
-    belt, rig = rigs.stale_capture(sim, t_freeze_ns=sim.ticks(p.t_freeze_ms, "ms"),
-                                   arm_after_ns=sim.ticks(p.arm_after_us, "us"), dummy_read=dummy_read)
+    belt, rig = rigs.stale_capture(sim, t_freeze=sim.ticks(p.t_freeze_ms, "ms"),
+                                   arm_after=sim.ticks(p.arm_after_us, "us"), dummy_read=dummy_read)
     t_mark2 = belt.mark_times[1][0]
 
     def time_zero_error() -> float:
@@ -58,7 +58,7 @@ def scenario(run: Run) -> None:
 
     def early() -> float:
         starts = rig.entry.starts
-        return float(belt.position(starts[0].t_ns) - belt.position(t_mark2)) if starts else float("nan")
+        return float(belt.position(starts[0].t) - belt.position(t_mark2)) if starts else float("nan")
 
     run.figure("master_at_start_minus_mark2_counts", early, "counts")
     run.figure("saturated_cycles", lambda: len(rig.entry.saturated_cycles))

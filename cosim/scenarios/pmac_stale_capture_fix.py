@@ -27,7 +27,7 @@ UNTIL = "40 ms"
 
 def scenario(run: Run) -> None:
     belt, rig, t_mark2 = pmac_stale_capture.stale_capture_run(run, dummy_read=True)
-    period = int(-(-rig.pmac.clock.period_ns // 1))
+    period = int(-(-rig.pmac.clock.period_ticks // 1))
     run.check(ValueAt("pmac.ect.time_zero_pos", None, float(belt.position(t_mark2)), tol=1 / 256,
                       name="time zero = master position at mark 2 (1/256 count)"))
     run.check(ValueAt("pmac.ect.method", t_mark2 - 1, ARMED, name="still armed just before mark 2"))

@@ -56,7 +56,7 @@ def scenario(run: Run) -> None:
 
     t_mark = belt.mark_times[0][0]
     true_pos = belt.position(t_mark)
-    period = int(-(-rig.pmac.clock.period_ns // 1))
+    period = int(-(-rig.pmac.clock.period_ticks // 1))
     run.check(ValueAt("pmac.ect.time_zero_pos", None, float(true_pos), tol=1 / 256,
                       name="time zero = master position at the mark (1/256 count)"))
     run.check(Duration(EdgeRef("conveyor.mark", 1), EdgeRef("pmac.ect.method", RUNNING), max=period,

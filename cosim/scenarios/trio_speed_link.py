@@ -116,7 +116,7 @@ def scenario(run: Run) -> None:
     if p.laser:
         laser = run.plant("Laser", name="laser", preset="laser_co2_40w")
         couple_laser(trio.pwm_port(3), laser)
-        laser.record(["power", "energy"], period=trio.period_ns)
+        laser.record(["power", "energy"], period=trio.period_ticks)
         run.figure("laser_energy_per_mm_J", lambda: float(laser.read("energy")) / 120.0, "J/mm")
 
     def job() -> Any:
@@ -128,7 +128,7 @@ def scenario(run: Run) -> None:
         proc.set("WDOG", OFF)
 
     sim.process(job())
-    period = trio.period_ns
+    period = trio.period_ticks
     run.check(Bound("trio.axis3.pwm_mark", lower=0, upper=p.limit, name="the mark never exceeds the limit value"))
     bounds = (0.9, 1.1) if p.link else (1.5, 1e9)
     run.check(CornerEnergyRatio("trio.axis3.pwm_mark", "trio.axis2.vp_speed", period, CYCLE, *bounds,

@@ -94,8 +94,8 @@ class LimitEvent:
 
     Attributes
     ----------
-    cycle, t_ns : int
-        Servo cycle and its instant [ns].
+    cycle, t : int
+        Servo cycle and its instant [ticks].
     source, actual : int
         Source value and the limited actual value [2^-23 ms].
     slip_counts : Fraction or None
@@ -103,7 +103,7 @@ class LimitEvent:
     """
 
     cycle: int
-    t_ns: int
+    t: int
     source: int
     actual: int
     slip_counts: Fraction | None
@@ -219,7 +219,7 @@ class CoordinateSystem:
         return [e.cycle for e in self.limit_events]
 
     # -- servo cycle ------------------------------------------------------------------------
-    def update(self, cycle: int, t_ns: int) -> None:
+    def update(self, cycle: int, t: int) -> None:
         """One servo cycle: read the source, apply Ix94, advance the program."""
         source = self.source.read()
         self.source_value = source
@@ -235,10 +235,10 @@ class CoordinateSystem:
             if external:
                 self.slip_units += source - self.actual
                 if not any("Ix94" in n for _, n in self.notes):
-                    self.notes.append((t_ns, f"Ix94 limit acted under external time base at cycle {cycle}: "
+                    self.notes.append((t, f"Ix94 limit acted under external time base at cycle {cycle}: "
                                              "position synchronization to the master is lost"))
-            self.limit_events.append(LimitEvent(cycle, t_ns, source, self.actual, self.slip_counts))
-        self._advance_program(source if external else self.actual, t_ns)
+            self.limit_events.append(LimitEvent(cycle, t, source, self.actual, self.slip_counts))
+        self._advance_program(source if external else self.actual, t)
         self._tb.set(self.actual)
         self._pct.set(float(self.percent))
         self._src.set(source)
@@ -246,7 +246,7 @@ class CoordinateSystem:
         self._slip.set(int(slip) if slip is not None else 0)
         self._active.set(limited)
 
-    def _advance_program(self, ideal_units: int, t_ns: int) -> None:
+    def _advance_program(self, ideal_units: int, t: int) -> None:
         if self._pending is not None:
             items, _kind = self._pending
             self._pending = None
@@ -257,7 +257,7 @@ class CoordinateSystem:
         if self._runner is None or self._ideal is None:
             return
         if self._runner.in_dwell and self.external and not any("DWELL" in n for _, n in self.notes):
-            self.notes.append((t_ns, "DWELL under external time base: it runs in real time, so "
+            self.notes.append((t, "DWELL under external time base: it runs in real time, so "
                                      "synchronism with the master is lost"))
         self._runner.advance(self.actual, self.i10)
         self._ideal.advance(ideal_units, self.i10)

@@ -98,8 +98,8 @@ class Entry:
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
         """Resolve source addresses before the first cycle (raises if they point at nothing)."""
 
-    def convert(self, t_ns: int, table: ConversionTable) -> None:
-        """Run this entry for the servo cycle at ``t_ns``."""
+    def convert(self, t: int, table: ConversionTable) -> None:
+        """Run this entry for the servo cycle at ``t``."""
         raise NotImplementedError
 
     def label(self) -> str:
@@ -135,9 +135,9 @@ class OneOverTEntry(Entry):
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
         self._channel_obj = self._channel(channels, self.channel_address, "channel address")
 
-    def convert(self, t_ns: int, table: ConversionTable) -> None:
+    def convert(self, t: int, table: ConversionTable) -> None:
         assert self._channel_obj is not None
-        self.position = self._channel_obj.position(t_ns, ONE_OVER_T_BITS)
+        self.position = self._channel_obj.position(t, ONE_OVER_T_BITS)
 
     def x_word(self, offset: int) -> int:
         return self.position & REG_MASK
@@ -225,7 +225,7 @@ class TimeBaseEntry(DifferentiatingEntry):
                 Reg(self.source_address), f"position registers of the table: {known or 'none'}")
         self._source = source
 
-    def convert(self, t_ns: int, table: ConversionTable) -> None:
+    def convert(self, t: int, table: ConversionTable) -> None:
         assert self._source is not None
         self._cycle = table.cycle
         self.position = self._source.x_word(0)  # the 24-bit register, as the hardware reads it
@@ -248,18 +248,18 @@ class TriggerStart:
     ----------
     cycle : int
         Servo cycle in which the entry saw the trigger.
-    t_ns : int
-        Instant of that servo cycle.
+    t : int
+        Instant of that servo cycle [ticks].
     time_zero_pos256 : int
         Captured position used as time zero [1/256 count].
-    capture_t_ns : int or None
-        Instant the capture latched (None if the register was never latched).
+    capture_t : int or None
+        Instant the capture latched [ticks] (None if the register was never latched).
     """
 
     cycle: int
-    t_ns: int
+    t: int
     time_zero_pos256: int
-    capture_t_ns: int | None
+    capture_t: int | None
 
 
 class TriggeredTimeBaseEntry(DifferentiatingEntry):
@@ -315,14 +315,14 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
     def units_per_count(self) -> Fraction:
         return Fraction(2 * self.scale_factor << TRIGGERED_BITS)
 
-    def set_method(self, method: int, *, t_ns: int = 0) -> None:
+    def set_method(self, method: int, *, t: int = 0) -> None:
         """Change the method digit (a write of the first line: ``I8010=$B78008``)."""
         self.method = self._check_method(method)
-        self.method_changes.append((t_ns, self.method))
+        self.method_changes.append((t, self.method))
         if method == RUNNING:
             self._prev = None  # time zero = first running cycle's position
 
-    def write_first_line(self, value: int, *, where: str = "", t_ns: int = 0) -> None:
+    def write_first_line(self, value: int, *, where: str = "", t: int = 0) -> None:
         """Write the whole first setup line; only the method digit may change while running."""
         method = (value >> 20) & 0xF
         self._check_method(method, where=where, line_value=value)
@@ -331,7 +331,7 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
                 f"{self.origin or 'first line'} (source address)", Reg(value, digits=6, decimal=False),
                 f"the entry's own source ${self.channel_address | self.flags:05X} with method digit "
                 f"{_method_text()} (changing the source while running is not modelled)", where=where)
-        self.set_method(method, t_ns=t_ns)
+        self.set_method(method, t=t)
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
         self._channel_obj = self._channel(channels, self.channel_address, "channel address")
@@ -341,20 +341,20 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
         assert self._channel_obj is not None, "entry not bound to a channel"
         return self._channel_obj
 
-    def convert(self, t_ns: int, table: ConversionTable) -> None:
+    def convert(self, t: int, table: ConversionTable) -> None:
         channel = self.channel
         self._cycle = table.cycle
-        self.position = channel.position(t_ns, TRIGGERED_BITS)
+        self.position = channel.position(t, TRIGGERED_BITS)
         if self.method == FROZEN:
             channel.read_capture()
             self.result = 0
         elif self.method == ARMED:
             if channel.capture_flag:
-                capture_t = channel.capture_t_ns
+                capture_t = channel.capture_t
                 time_zero = channel.read_capture()
-                self.starts.append(TriggerStart(table.cycle, t_ns, time_zero, capture_t))
+                self.starts.append(TriggerStart(table.cycle, t, time_zero, capture_t))
                 self.method = RUNNING
-                self.method_changes.append((t_ns, RUNNING))
+                self.method_changes.append((t, RUNNING))
                 self._prev = time_zero
                 self.result = self._differentiate(self.position)
             else:
@@ -422,11 +422,11 @@ class ConversionTable:
         for entry in self.entries:
             entry.bind(self, channels)
 
-    def run(self, t_ns: int, cycle: int) -> None:
-        """Run every entry, top to bottom, for servo cycle ``cycle`` at ``t_ns``."""
+    def run(self, t: int, cycle: int) -> None:
+        """Run every entry, top to bottom, for servo cycle ``cycle`` at ``t``."""
         self.cycle = cycle
         for entry in self.entries:
-            entry.convert(t_ns, self)
+            entry.convert(t, self)
 
     @classmethod
     def from_lines(cls, lines: Mapping[int, int], *, base_address: int = TURBO_ECT_BASE, first_ivar: int = 8000,

@@ -65,7 +65,7 @@ class EncoderChannel:
         self.name = name or f"ch{address:x}"
         self.capture_flag = False
         self.captured_pos256: int | None = None
-        self.capture_t_ns: int | None = None
+        self.capture_t: int | None = None
         self.captures: list[tuple[int, int]] = []
         self._flag = Signal(sim, f"{device}.{self.name}.capture_flag", kind="bit",
                             description=f"capture flag of encoder channel ${address:06X}")
@@ -74,13 +74,13 @@ class EncoderChannel:
             if trigger.value == trigger_level:
                 self._latch()
 
-    def position(self, t_ns: int, fraction_bits: int) -> int:
-        """1/T-extended position at ``t_ns`` [2^-fraction_bits count], unwrapped."""
-        return extend_one_over_t(self.encoder.sample(t_ns), t_ns, fraction_bits)
+    def position(self, t: int, fraction_bits: int) -> int:
+        """1/T-extended position at ``t`` [2^-fraction_bits count], unwrapped."""
+        return extend_one_over_t(self.encoder.sample(t), t, fraction_bits)
 
-    def count(self, t_ns: int) -> int:
-        """Whole-count position at ``t_ns`` [counts]."""
-        return self.encoder.sample(t_ns).count
+    def count(self, t: int) -> int:
+        """Whole-count position at ``t`` [counts]."""
+        return self.encoder.sample(t).count
 
     def _on_trigger(self, signal: Signal) -> None:
         if signal.value == self.trigger_level and not self.capture_flag:
@@ -89,7 +89,7 @@ class EncoderChannel:
     def _latch(self) -> None:
         t = self.sim.now
         self.captured_pos256 = self.position(t, 8)
-        self.capture_t_ns = t
+        self.capture_t = t
         self.captures.append((t, self.captured_pos256))
         self.capture_flag = True
         self._flag.set(1)

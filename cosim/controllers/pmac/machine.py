@@ -1,7 +1,8 @@
 """The PMAC controller model: servo clock, conversion table, coordinate systems, motors.
 
 One SimPy process, :meth:`Pmac.servo_cycle`, runs every servo interrupt ``k`` at
-``floor(k * I10 * 10^6 / 2^23)`` ns with priority ``SERVO``, in the firmware's order:
+``floor(k * I10 * 10^6 / 2^23)`` ns (floored to the resolution's ticks) with priority ``SERVO``,
+in the firmware's order:
 
 1. the encoder conversion table, top to bottom;
 2. every coordinate system (time-base source via Ix93, Ix94 slew, program advance);
@@ -35,7 +36,7 @@ from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.servo import PidLoop
 from cosim.controllers.pmac.units import I10_DEFAULT, Reg, ServoClock, hexaddr
 from cosim.errors import ConfigurationError
-from cosim.signals import Signal
+from cosim.signals import PulseTrain, Signal
 from cosim.timebase import Priority
 
 if TYPE_CHECKING:
@@ -84,7 +85,7 @@ class Pmac:
                  device: str = "pmac") -> None:
         self.sim = sim
         self.device = device
-        self.clock = ServoClock(i10, sim.now)
+        self.clock = ServoClock(i10, sim.now, sim.timebase.resolution_s * 10**9)
         self.table = table if table is not None else ConversionTable(TURBO_ECT_BASE)
         self.channels: dict[int, EncoderChannel] = {}
         self.cs: dict[int, CoordinateSystem] = {}
@@ -164,7 +165,7 @@ class Pmac:
             if self.cs:
                 raise ConfigurationError(f"{where + ': ' if where else ''}set I10 before creating coordinate "
                                          "systems (their % registers are in units of I10)")
-            self.clock = ServoClock(value, self.clock.t0_ns)
+            self.clock = ServoClock(value, self.clock.t0, self.clock.ns_per_tick)
         elif cs_var is not None:
             x, suffix = cs_var
             if suffix == 93:
@@ -198,7 +199,7 @@ class Pmac:
                 "that holds no entry is only modelled through load_setup() before start")
         offset = address - entry.address
         if isinstance(entry, TriggeredTimeBaseEntry) and offset == 0:
-            entry.write_first_line(value, where=where, t_ns=self.sim.now)
+            entry.write_first_line(value, where=where, t=self.sim.now)
             if self._method is not None and entry is self._trigger_entry():
                 self._method.set(entry.method)
         elif isinstance(entry, DifferentiatingEntry) and offset == 1:
@@ -242,6 +243,15 @@ class Pmac:
                                               "encoder channel registers (+0 position, +3 capture), table lines, "
                                               "% registers")
 
+    # -- the controller protocol ------------------------------------------------------------
+    def outputs(self) -> list[Signal | PulseTrain]:
+        """Every signal the PMAC drives: each motor's DAC (:class:`cosim.controllers.Controller`)."""
+        return [motor.dac for motor in self.motors.values()]
+
+    def inputs(self) -> list[Signal]:
+        """Every signal the PMAC reads: the channels' capture triggers."""
+        return [c.trigger for c in self.channels.values() if c.trigger is not None]
+
     # -- running ---------------------------------------------------------------------------
     def _trigger_entry(self) -> TriggeredTimeBaseEntry | None:
         return next((e for e in self.table.entries if isinstance(e, TriggeredTimeBaseEntry)), None)
@@ -278,7 +288,7 @@ class Pmac:
         k = k0 = self.clock.first_cycle_at_or_after(self.sim.now)
         trigger = self._trigger_entry()
         while True:
-            t = self.clock.t_ns(k)
+            t = self.clock.t(k)
             yield self.sim.at(t, Priority.SERVO)
             self.cycle = k
             self.table.run(t, k)

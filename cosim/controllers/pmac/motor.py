@@ -68,7 +68,7 @@ class Motor:
                             description="master-derived position - actual (slip + following error)")
         self.dac = Signal(sim, f"{p}.dac", kind="int", unit="bits", description="16-bit DAC output")
 
-    def update(self, cycle: int, t_ns: int) -> None:
+    def update(self, cycle: int, t: int) -> None:
         """One servo cycle: command, feedback, PID, DAC."""
         self.cmd = self.cs.position(self.axis) * self.counts_per_unit
         ideal = self.cs.ideal_position(self.axis) * self.counts_per_unit

@@ -7,18 +7,20 @@ so 100 % is a time-base value equal to I10.
 Servo interrupt instants
 ------------------------
 I10 is rarely a whole number of nanoseconds (the default 3,713,707 is 442,708.37 ns). The model
-never rounds the period and never accumulates it: servo interrupt ``k`` is at::
+never rounds the period and never accumulates it: servo interrupt ``k`` is at the first tick of
+the simulation's resolution at or before its exact instant::
 
-    t_k = t0 + floor(k * I10 * 10**6 / 2**23)   [ns]
+    t_k = t0 + floor(k * I10 * 10**6 / (2**23 * ns_per_tick))   [ticks]
 
-computed exactly from ``k``. Consecutive interrupts are therefore 442,708 or 442,709 ns apart with
-the default I10, and their average is exactly I10 * 10**6 / 2**23 ns: the interrupt count never
-drifts from the real-time clock by more than 1 ns.
+computed exactly from ``k``. At the default 1 ns resolution consecutive interrupts are therefore
+442,708 or 442,709 ns apart with the default I10, and their average is exactly
+I10 * 10**6 / 2**23 ns: the interrupt count never drifts from the real-time clock by more than
+one tick.
 
 Examples
 --------
 >>> clock = ServoClock()
->>> [clock.t_ns(k) for k in range(4)]
+>>> [clock.t(k) for k in range(4)]
 [0, 442708, 885416, 1328125]
 >>> ServoClock.from_period_ns(250_000).i10
 2097152
@@ -132,19 +134,24 @@ class ServoClock:
     ----------
     i10 : int
         Servo interrupt time, I10 [2^-23 ms], 1..8,388,607 (0 would stop the clock).
-    t0_ns : int
-        Instant of servo interrupt 0 [ns].
+    t0 : int
+        Instant of servo interrupt 0 [ticks].
+    ns_per_tick : Fraction
+        The simulation's resolution [ns per tick] (1 by default; ``Pmac`` passes its own).
     """
 
     i10: int = I10_DEFAULT
-    t0_ns: int = 0
+    t0: int = 0
+    ns_per_tick: Fraction = Fraction(1)
 
     def __post_init__(self) -> None:
         check_int("I10 (servo interrupt time)", self.i10, 1, REG_MAX, unit="(2^-23 ms)")
-        check_int("t0_ns", self.t0_ns, 0, 1 << 62, unit="ns")
+        check_int("t0", self.t0, 0, 1 << 62, unit="ticks")
+        if not self.ns_per_tick > 0:
+            raise ConfigurationError.out_of_range("ns_per_tick", self.ns_per_tick, "> 0")
 
     @classmethod
-    def from_period_ns(cls, period_ns: int, *, t0_ns: int = 0) -> ServoClock:
+    def from_period_ns(cls, period_ns: int, *, t0: int = 0, ns_per_tick: Fraction = Fraction(1)) -> ServoClock:
         """The clock whose period is exactly ``period_ns`` (a multiple of 15,625 ns).
 
         Raises
@@ -158,12 +165,17 @@ class ServoClock:
                 "servo period_ns", period_ns,
                 "multiples of 15625 ns (I10 = period_ns * 2^23 / 10^6 must be an integer); "
                 "use ServoClock(i10=...) for other periods")
-        return cls(int(i10), t0_ns)
+        return cls(int(i10), t0, ns_per_tick)
 
     @property
     def period_ns(self) -> Fraction:
         """Exact servo period [ns] (usually not an integer)."""
         return Fraction(self.i10 * NS_PER_MS, UNITS_PER_MS)
+
+    @property
+    def period_ticks(self) -> Fraction:
+        """Exact servo period [ticks] (usually not an integer)."""
+        return self.period_ns / self.ns_per_tick
 
     @property
     def rate_hz(self) -> Fraction:
@@ -175,16 +187,18 @@ class ServoClock:
         """Servo period [s] as a float: for controller design only, never for time keeping."""
         return float(self.period_ns) / 1e9
 
-    def t_ns(self, k: int) -> int:
-        """Instant of servo interrupt ``k`` [ns]: ``t0 + floor(k * I10 * 10^6 / 2^23)``."""
-        return self.t0_ns + (k * self.i10 * NS_PER_MS) // UNITS_PER_MS
+    def t(self, k: int) -> int:
+        """Instant of servo interrupt ``k`` [ticks]: ``t0 + floor(k * period_ticks)``."""
+        exact = k * self.period_ticks
+        return self.t0 + exact.numerator // exact.denominator
 
-    def first_cycle_at_or_after(self, t_ns: int) -> int:
-        """Smallest ``k`` with ``t_ns(k) >= t_ns``."""
-        if t_ns <= self.t0_ns:
+    def first_cycle_at_or_after(self, t: int) -> int:
+        """Smallest ``k`` with ``t(k) >= t`` (``t`` in ticks)."""
+        if t <= self.t0:
             return 0
-        k = ((t_ns - self.t0_ns) * UNITS_PER_MS) // (self.i10 * NS_PER_MS)
-        while self.t_ns(k) < t_ns:
+        period = self.period_ticks
+        k = int((t - self.t0) / period)
+        while self.t(k) < t:
             k += 1
         return k
 

@@ -21,6 +21,7 @@ down lands exactly on the target.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 from fractions import Fraction
 from math import isqrt, lcm
 
@@ -109,6 +110,14 @@ def speed_towards(v: int, target: int, limits: SlotLimits) -> int:
     return step if v > 0 else -step
 
 
+class Mode(Enum):
+    """What the internal controller of an axis is doing."""
+
+    IDLE = 0
+    POSITION = 1  # internal position control: towards a target
+    SPEED = 2  # internal speed control (and jogging): towards a speed
+
+
 class AxisMotion:
     """Per-slot motion of one coordinate: a position or a speed reference.
 
@@ -130,7 +139,7 @@ class AxisMotion:
         self.limits = limits
         self.p = position * limits.scale  # exact position [1/scale pulse]
         self.v = 0  # speed of the last slot [1/scale pulse per slot]
-        self.mode = "idle"
+        self.mode = Mode.IDLE
         self._target = 0
 
     @property
@@ -141,21 +150,21 @@ class AxisMotion:
     @property
     def done(self) -> bool:
         """True when a position move has arrived at rest (always False in speed mode)."""
-        return self.mode == "idle" or (self.mode == "position" and self.v == 0 and self.p == self._target)
+        return self.mode is Mode.IDLE or (self.mode is Mode.POSITION and self.v == 0 and self.p == self._target)
 
     def move_to(self, target: int) -> None:
         """Position control: go to ``target`` [pulses] within the limits."""
-        self.mode = "position"
+        self.mode = Mode.POSITION
         self._target = target * self.limits.scale
 
     def run_at(self, speed_per_slot: Fraction) -> None:
         """Speed control: run at ``speed_per_slot`` [pulses/slot, signed] within the limits."""
-        self.mode = "speed"
+        self.mode = Mode.SPEED
         self._target = self.limits.speed(speed_per_slot)
 
     def halt(self) -> None:
         """Hard stop: speed 0 at once, no reference."""
-        self.mode = "idle"
+        self.mode = Mode.IDLE
         self.v = 0
 
     def reset_position(self, position: int) -> None:
@@ -164,15 +173,15 @@ class AxisMotion:
 
     def step(self) -> int:
         """Advance one slot; return the signed pulses of that slot."""
-        if self.mode == "idle":
+        if self.mode is Mode.IDLE:
             return 0
-        if self.mode == "speed":
+        if self.mode is Mode.SPEED:
             self.v = speed_towards(self.v, self._target, self.limits)
         else:
             self.v = self._position_speed()
         before = self.p
         self.p += self.v
-        if self.mode == "position" and self.p == self._target and abs(self.v) <= self.limits.decel:
+        if self.mode is Mode.POSITION and self.p == self._target and abs(self.v) <= self.limits.decel:
             self.v = 0  # arrived: the next slot's speed is 0 anyway
         return self.p // self.limits.scale - before // self.limits.scale
 

@@ -83,7 +83,7 @@ class TrioController:
                  device: str = "trio") -> None:
         self.sim = sim
         self.servo_period_us = check_servo_period_us(servo_period_us)
-        self.period_ns = sim.ticks(self.servo_period_us, "us", name="SERVO_PERIOD")
+        self.period_ticks = sim.ticks(self.servo_period_us, "us", name="SERVO_PERIOD")
         self.period_s = Fraction(self.servo_period_us, 10**6)
         if isinstance(n_axes, bool) or not isinstance(n_axes, int) or not max(PWM_AXES) < n_axes <= 64:
             raise ConfigurationError.out_of_range("n_axes", n_axes, f"{max(PWM_AXES) + 1}..64")
@@ -105,9 +105,9 @@ class TrioController:
     # -- the servo cycle ----------------------------------------------------------------------
     def servo_cycle(self) -> Generator[Event, Any, None]:
         """SimPy process: the servo interrupt at ``k * SERVO_PERIOD``."""
-        k = -(-self.sim.now // self.period_ns)
+        k = -(-self.sim.now // self.period_ticks)
         while True:
-            yield self.sim.at(k * self.period_ns, Priority.SERVO)
+            yield self.sim.at(k * self.period_ticks, Priority.SERVO)
             self._tick()
             k += 1
 
@@ -138,7 +138,7 @@ class TrioController:
             demands, speed = move.advance(self.period_s)
             for a, demand in zip(move.axes, demands, strict=True):
                 self.axes[a].vp_speed = speed
-                self.axes[a].output_cycle(now, self.period_ns, demand)
+                self.axes[a].output_cycle(now, self.period_ticks, demand)
         for axis in axes:
             axis.apply_offset()
         for axis in axes:
@@ -389,7 +389,7 @@ class TrioController:
 
     def gate(self, axis: int) -> GateFifo:
         """The gating FIFO of a PWM axis."""
-        return self._gate(self.axis(axis).number, "gate")
+        return self._gate(self.axis(axis).number, "gating FIFO")
 
     def pwm_port(self, axis: int = 3) -> PwmPort:
         """The outputs that modulate a laser from PWM axis ``axis`` (see :mod:`cosim.couplings.laser`).

@@ -185,7 +185,7 @@ class Axis:
         self.feedback.set_value(self.sim.now, self.steps)
 
     # -- servo cycle --------------------------------------------------------------------------
-    def output_cycle(self, t0: int, period_ns: int, demand: Fraction) -> None:
+    def output_cycle(self, t0: int, period: int, demand: Fraction) -> None:
         """Set the demand for the end of the cycle starting at ``t0`` and emit its step pulses."""
         self.demand = demand
         if not self.stepper:
@@ -195,20 +195,20 @@ class Axis:
         if delta == 0:
             return
         count = abs(delta)
-        if count > period_ns:
+        if count > period:
             raise TimingViolation(
-                f"{self.prefix}: {count} step pulses in one servo cycle of {period_ns} ns is more than one "
-                "pulse per ns; lower SPEED or raise UNITS resolution")
+                f"{self.prefix}: {count} step pulses in one servo cycle of {period} ticks is more than one "
+                "pulse per tick; lower SPEED or raise UNITS resolution")
         direction = 1 if delta > 0 else 0
         assert self.step is not None and self.dir is not None
         self.dir.set(direction)
-        self.step.emit(t0, period_ns, count, direction)
+        self.step.emit(t0, period, count, direction)
         self.steps = target
         if self.params["SERVO"]:
             sign = 1 if delta > 0 else -1
-            self.feedback.feed(t0, period_ns, count, sign)
+            self.feedback.feed(t0, period, count, sign)
             if self.gate is not None:
-                self.gate.feed(t0, period_ns, count, sign)
+                self.gate.feed(t0, period, count, sign)
 
     def sample_mpos(self) -> None:
         """Servo tick, before the cycle's pulses: latch MPOS (the pulses counted so far)."""

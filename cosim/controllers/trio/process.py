@@ -112,7 +112,7 @@ class TrioProcess:
 
     def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
         """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""
-        period = self.controller.period_ns
+        period = self.controller.period_ticks
         while not condition():
             yield self.sim.at((self.sim.now // period + 1) * period, Priority.HOST)
 

@@ -116,6 +116,7 @@ class PwmGenerator:
 
     def __init__(self, sim: Simulation, prefix: str) -> None:
         self.sim = sim
+        self.clock_ticks = sim.ticks(PWM_CLOCK_NS, "ns", name="PWM clock period (50 ns)")
         self.mode = PwmMode.OFF
         self.cycle = 0
         self.mark = 0
@@ -136,7 +137,7 @@ class PwmGenerator:
         """Write ``PWM_CYCLE`` [clocks] (checked by the caller); the carrier restarts at the next clock."""
         if cycle != self.cycle:
             self.cycle = cycle
-            self.phase_out.set(-(-self.sim.now // PWM_CLOCK_NS))
+            self.phase_out.set(-(-self.sim.now // self.clock_ticks))
         self.cycle_out.request(cycle)
 
     def set_mark(self, mark: int) -> None:
@@ -160,16 +161,18 @@ class PwmGenerator:
 
 
 # -- the output in closed form -----------------------------------------------------------------
-def carrier_edges(t0_ns: int, t1_ns: int, *, cycle: int, mark: int, phase: int = 0,
+def carrier_edges(t0: int, t1: int, *, cycle: int, mark: int, clock_ticks: int, phase: int = 0,
                   enabled: bool = True) -> tuple[IntArray, IntArray]:
-    """Exact edges of the PWM output over ``[t0_ns, t1_ns)`` with constant settings.
+    """Exact edges of the PWM output over ``[t0, t1)`` with constant settings.
 
     Parameters
     ----------
-    t0_ns, t1_ns : int
-        Interval [ns].
+    t0, t1 : int
+        Interval [ticks].
     cycle, mark : int
         PWM_CYCLE and the mark [20 MHz clocks].
+    clock_ticks : int
+        Length of a PWM clock [ticks] (50 ns: 50 at the default resolution).
     phase : int
         Clock count at which a carrier period starts.
     enabled : bool
@@ -178,51 +181,52 @@ def carrier_edges(t0_ns: int, t1_ns: int, *, cycle: int, mark: int, phase: int =
     Returns
     -------
     (t, level) : arrays of int
-        The level at ``t0_ns`` first, then each change inside the interval.
+        The level at ``t0`` first, then each change inside the interval.
 
     Examples
     --------
-    >>> t, v = carrier_edges(0, 100_000, cycle=1000, mark=400)
+    >>> t, v = carrier_edges(0, 100_000, cycle=1000, mark=400, clock_ticks=50)
     >>> t.tolist(), v.tolist()
     ([0, 20000, 50000, 70000], [1, 0, 1, 0])
     """
     if not enabled or mark <= 0:
-        return np.array([t0_ns], dtype=np.int64), np.array([0], dtype=np.int64)
+        return np.array([t0], dtype=np.int64), np.array([0], dtype=np.int64)
     if mark >= cycle:
-        return np.array([t0_ns], dtype=np.int64), np.array([1], dtype=np.int64)
-    period_ns, on_ns, start_ns = cycle * PWM_CLOCK_NS, mark * PWM_CLOCK_NS, phase * PWM_CLOCK_NS
-    k0 = (t0_ns - start_ns) // period_ns
-    k1 = -(-(t1_ns - start_ns) // period_ns)
-    rise = start_ns + np.arange(k0, k1 + 1, dtype=np.int64) * period_ns
-    t = np.stack([rise, rise + on_ns], axis=1).ravel()
+        return np.array([t0], dtype=np.int64), np.array([1], dtype=np.int64)
+    period, on, start = cycle * clock_ticks, mark * clock_ticks, phase * clock_ticks
+    k0 = (t0 - start) // period
+    k1 = -(-(t1 - start) // period)
+    rise = start + np.arange(k0, k1 + 1, dtype=np.int64) * period
+    t = np.stack([rise, rise + on], axis=1).ravel()
     v = np.tile(np.array([1, 0], dtype=np.int64), rise.size)
-    level_at_t0 = int(v[np.searchsorted(t, t0_ns, side="right") - 1])
-    inside = (t > t0_ns) & (t < t1_ns)
-    return (np.concatenate([[t0_ns], t[inside]]).astype(np.int64),
+    level_at_t0 = int(v[np.searchsorted(t, t0, side="right") - 1])
+    inside = (t > t0) & (t < t1)
+    return (np.concatenate([[t0], t[inside]]).astype(np.int64),
             np.concatenate([[level_at_t0], v[inside]]).astype(np.int64))
 
 
-def output_waveform(trace: Trace, axis: int, t0_ns: int, t1_ns: int, *,
+def output_waveform(trace: Trace, axis: int, t0: int, t1: int, *,
                     device: str = "trio") -> tuple[IntArray, IntArray]:
-    """Exact edges of an axis' PWM output over ``[t0_ns, t1_ns)``, from the trace alone.
+    """Exact edges of an axis' PWM output over ``[t0, t1)`` [ticks], from the trace alone.
 
     The output is high when WDOG is on, the gate is open, and the carrier of ``pwm_cycle``,
     ``pwm_mark`` and ``pwm_phase`` is in its mark. Returns ``(t, level)``: the level at
-    ``t0_ns`` first, then every change.
+    ``t0`` first, then every change.
     """
     prefix = f"{device}.axis{axis}"
     names = (f"{device}.wdog", f"{prefix}.gate", f"{prefix}.pwm_cycle", f"{prefix}.pwm_mark",
              f"{prefix}.pwm_phase")
-    cuts = {t0_ns}
+    clock_ticks = trace.timebase.ticks(PWM_CLOCK_NS, "ns", name="PWM clock period (50 ns)")
+    cuts = {t0}
     for name in names:
         t, _ = trace.edges(name)
-        cuts.update(int(x) for x in t[(t > t0_ns) & (t < t1_ns)])
-    bounds = [*sorted(cuts), t1_ns]
+        cuts.update(int(x) for x in t[(t > t0) & (t < t1)])
+    bounds = [*sorted(cuts), t1]
     ts: list[IntArray] = []
     vs: list[IntArray] = []
     for a, b in pairwise(bounds):
         wdog, gate, cycle, mark, phase = (trace.value_at(n, a) for n in names)
-        t, v = carrier_edges(a, b, cycle=int(cycle), mark=int(mark), phase=int(phase),
+        t, v = carrier_edges(a, b, cycle=int(cycle), mark=int(mark), clock_ticks=clock_ticks, phase=int(phase),
                              enabled=bool(wdog) and bool(gate))
         ts.append(t)
         vs.append(v)
