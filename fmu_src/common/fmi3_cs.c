@@ -3,22 +3,21 @@
  * Supported: Float64, Int32 and Boolean scalars, FMU state get/set/serialise, early return from
  * fmi3DoStep at model events (when the importer allows it) and event mode. Everything else of the
  * API is present and answers with a logged error. */
-#include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
 #include "cosim_fmu.h"
 
 #define M ((ModelInstance *)instance)
-#define ANY_PHASE (PH_MASK(PH_INSTANTIATED) | PH_MASK(PH_INITIALIZATION) | PH_MASK(PH_STEP) | PH_MASK(PH_EVENT) | \
-                   PH_MASK(PH_TERMINATED))
+/* The entry check: return fmi3Error unless the state table allows the call. */
+#define ENTER(fn)                                                                                             \
+    do {                                                                                                      \
+        if (!cf_enter(M, CALL_##fn)) {                                                                        \
+            return fmi3Error;                                                                                 \
+        }                                                                                                     \
+    } while (0)
 
-static fmi3Status result(ModelInstance *m, Status status) {
-    if (status >= ST_ERROR) {
-        m->phase = PH_ERROR;
-    }
-    return (fmi3Status)status;
-}
+static fmi3Status result(ModelInstance *m, Status status) { return (fmi3Status)cf_result(m, status); }
 
 static void sink(ModelInstance *m, Status status, const char *category, const char *message) {
     fmi3LogMessageCallback log = (fmi3LogMessageCallback)m->log_fn;
@@ -27,29 +26,17 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
     }
 }
 
-static fmi3Status unsupported(fmi3Instance instance, const char *fn) {
-    if (instance != NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "%s is not supported by this FMU", fn);
-    }
-    return fmi3Error;
+static fmi3Status unsupported(fmi3Instance instance, FmiCall call) { return result(M, cf_unsupported(M, call)); }
+
+static fmi3Status no_vars(fmi3Instance instance, FmiCall call, size_t nvr) {
+    return result(M, cf_no_vars(M, call, nvr));
 }
 
-/* For variable types the models do not have: fine for zero variables, an error otherwise. */
-static fmi3Status no_vars(fmi3Instance instance, size_t nvr, const char *fn) {
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    if (nvr == 0) {
-        return fmi3OK;
-    }
-    cf_log(M, ST_ERROR, "logStatusError", "%s: the model has no variables of this type", fn);
-    return fmi3Error;
-}
-
-static int scalars(fmi3Instance instance, size_t nvr, size_t nValues, const char *fn) {
+/* 1 if there is one value per value reference (the models have scalars only); logs otherwise. */
+static int scalars(ModelInstance *m, FmiCall call, size_t nvr, size_t nValues) {
     if (nvr != nValues) {
-        cf_log(M, ST_ERROR, "logStatusError", "%s: %lu values for %lu value references (the model has scalars only)",
-               fn, (unsigned long)nValues, (unsigned long)nvr);
+        cf_log(m, ST_ERROR, "logStatusError", "%s: %lu values for %lu value references (the model has scalars only)",
+               cf_call_name(call), (unsigned long)nValues, (unsigned long)nvr);
         return 0;
     }
     return 1;
@@ -61,9 +48,7 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
                                const fmi3String categories[]) {
     (void)nCategories;
     (void)categories;
-    if (instance == NULL) {
-        return fmi3Error;
-    }
+    ENTER(fmi3SetDebugLogging);
     M->logging_on = loggingOn ? 1 : 0;
     return fmi3OK;
 }
@@ -144,7 +129,11 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
     return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) { cf_free(M); }
+void fmi3FreeInstance(fmi3Instance instance) {
+    if (cf_enter(M, CALL_fmi3FreeInstance)) {
+        cf_free(M);
+    }
+}
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
@@ -152,9 +141,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterInitializationMode", PH_MASK(PH_INSTANTIATED))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterInitializationMode);
     M->start_time = startTime;
     M->time = startTime;
     M->phase = PH_INITIALIZATION;
@@ -164,9 +151,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     Status status;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3ExitInitializationMode", PH_MASK(PH_INITIALIZATION))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3ExitInitializationMode);
     status = cf_exit_init(M);
     if (status <= ST_WARNING) {
         M->phase = M->event_mode_used ? PH_EVENT : PH_STEP;
@@ -175,25 +160,19 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterEventMode", PH_MASK(PH_STEP))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterEventMode);
     M->phase = PH_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3Terminate", PH_MASK(PH_STEP) | PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3Terminate);
     M->phase = PH_TERMINATED;
     return fmi3OK;
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
-    if (instance == NULL) {
-        return fmi3Error;
-    }
+    ENTER(fmi3Reset);
     cf_defaults(M);
     return fmi3OK;
 }
@@ -201,46 +180,51 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 /* -- variables ---------------------------------------------------------------------------------- */
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
                           size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetFloat64")) {
-        return fmi3Error;
+    ENTER(fmi3GetFloat64);
+    if (!scalars(M, CALL_fmi3GetFloat64, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_get(M, VT_FLOAT64, vr, nvr, values, "fmi3GetFloat64"));
+    return result(M, cf_get(M, CALL_fmi3GetFloat64, VT_FLOAT64, vr, nvr, values));
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetFloat64")) {
-        return fmi3Error;
+    ENTER(fmi3SetFloat64);
+    if (!scalars(M, CALL_fmi3SetFloat64, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_set(M, VT_FLOAT64, vr, nvr, values, "fmi3SetFloat64"));
+    return result(M, cf_set(M, CALL_fmi3SetFloat64, VT_FLOAT64, vr, nvr, values));
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
                         size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetInt32")) {
-        return fmi3Error;
+    ENTER(fmi3GetInt32);
+    if (!scalars(M, CALL_fmi3GetInt32, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_get(M, VT_INT32, vr, nvr, values, "fmi3GetInt32"));
+    return result(M, cf_get(M, CALL_fmi3GetInt32, VT_INT32, vr, nvr, values));
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
                         size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetInt32")) {
-        return fmi3Error;
+    ENTER(fmi3SetInt32);
+    if (!scalars(M, CALL_fmi3SetInt32, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_set(M, VT_INT32, vr, nvr, values, "fmi3SetInt32"));
+    return result(M, cf_set(M, CALL_fmi3SetInt32, VT_INT32, vr, nvr, values));
 }
 
 /* fmi3Boolean is a C bool; the model stores Booleans as int: convert one at a time. */
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
                           size_t nValues) {
     size_t i;
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetBoolean")) {
-        return fmi3Error;
+    ENTER(fmi3GetBoolean);
+    if (!scalars(M, CALL_fmi3GetBoolean, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
     for (i = 0; i < nvr; i++) {
         int value = 0;
-        Status status = cf_get(M, VT_BOOL, &vr[i], 1, &value, "fmi3GetBoolean");
+        Status status = cf_get(M, CALL_fmi3GetBoolean, VT_BOOL, &vr[i], 1, &value);
         if (status > ST_WARNING) {
             return result(M, status);
         }
@@ -252,12 +236,13 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Boolean values[], size_t nValues) {
     size_t i;
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetBoolean")) {
-        return fmi3Error;
+    ENTER(fmi3SetBoolean);
+    if (!scalars(M, CALL_fmi3SetBoolean, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
     for (i = 0; i < nvr; i++) {
         int value = values[i] ? 1 : 0;
-        Status status = cf_set(M, VT_BOOL, &vr[i], 1, &value, "fmi3SetBoolean");
+        Status status = cf_set(M, CALL_fmi3SetBoolean, VT_BOOL, &vr[i], 1, &value);
         if (status > ST_WARNING) {
             return result(M, status);
         }
@@ -265,21 +250,22 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     return fmi3OK;
 }
 
-#define NO_GETTER(NAME, T)                                                                                        \
-    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T values[],      \
-                             size_t nValues) {                                                                  \
-        (void)vr;                                                                                               \
-        (void)values;                                                                                           \
-        (void)nValues;                                                                                          \
-        return no_vars(instance, nvr, "fmi3Get" #NAME);                                                         \
+/* Variable types no model has: fine for no variables, an error otherwise. */
+#define NO_GETTER(NAME, T)                                                                                           \
+    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T values[],           \
+                             size_t nValues) {                                                                       \
+        (void)vr;                                                                                                    \
+        (void)values;                                                                                                \
+        (void)nValues;                                                                                               \
+        return no_vars(instance, CALL_fmi3Get##NAME, nvr);                                                           \
     }
-#define NO_SETTER(NAME, T)                                                                                        \
-    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const T values[], \
-                             size_t nValues) {                                                                  \
-        (void)vr;                                                                                               \
-        (void)values;                                                                                           \
-        (void)nValues;                                                                                          \
-        return no_vars(instance, nvr, "fmi3Set" #NAME);                                                         \
+#define NO_SETTER(NAME, T)                                                                                           \
+    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const T values[],     \
+                             size_t nValues) {                                                                       \
+        (void)vr;                                                                                                    \
+        (void)values;                                                                                                \
+        (void)nValues;                                                                                               \
+        return no_vars(instance, CALL_fmi3Set##NAME, nvr);                                                           \
     }
 
 NO_GETTER(Float32, fmi3Float32)
@@ -307,7 +293,7 @@ fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
     (void)valueSizes;
     (void)values;
     (void)nValues;
-    return no_vars(instance, nvr, "fmi3GetBinary");
+    return no_vars(instance, CALL_fmi3GetBinary, nvr);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
@@ -316,26 +302,26 @@ fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], s
     (void)valueSizes;
     (void)values;
     (void)nValues;
-    return no_vars(instance, nvr, "fmi3SetBinary");
+    return no_vars(instance, CALL_fmi3SetBinary, nvr);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]) {
     (void)vr;
     (void)values;
-    return no_vars(instance, nvr, "fmi3GetClock");
+    return no_vars(instance, CALL_fmi3GetClock, nvr);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
     (void)vr;
     (void)values;
-    return no_vars(instance, nvr, "fmi3SetClock");
+    return no_vars(instance, CALL_fmi3SetClock, nvr);
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
                                                size_t *nDependencies) {
     (void)valueReference;
     (void)nDependencies;
-    return unsupported(instance, "fmi3GetNumberOfVariableDependencies");
+    return unsupported(instance, CALL_fmi3GetNumberOfVariableDependencies);
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
@@ -348,81 +334,41 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
     (void)elementIndicesOfIndependents;
     (void)dependencyKinds;
     (void)nDependencies;
-    return unsupported(instance, "fmi3GetVariableDependencies");
+    return unsupported(instance, CALL_fmi3GetVariableDependencies);
 }
 
 /* -- FMU state ---------------------------------------------------------------------------------- */
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    ModelSnapshot *snap;
-    if (instance == NULL || FMUState == NULL || !cf_phase_allows(M, "fmi3GetFMUState", ANY_PHASE)) {
-        return fmi3Error;
-    }
-    snap = (ModelSnapshot *)(*FMUState != NULL ? *FMUState : malloc(sizeof(ModelSnapshot)));
-    if (snap == NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "fmi3GetFMUState: out of memory");
-        return fmi3Error;
-    }
-    snap->phase = M->phase;
-    snap->time = M->time;
-    snap->v = M->v;
-    snap->s = M->s;
-    *FMUState = snap;
-    return fmi3OK;
+    ENTER(fmi3GetFMUState);
+    return result(M, cf_state_get(M, CALL_fmi3GetFMUState, FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    const ModelSnapshot *snap = (const ModelSnapshot *)FMUState;
-    if (instance == NULL || snap == NULL || !cf_phase_allows(M, "fmi3SetFMUState", ANY_PHASE)) {
-        return fmi3Error;
-    }
-    M->phase = snap->phase;
-    M->time = snap->time;
-    M->v = snap->v;
-    M->s = snap->s;
-    M->outputs_stale = 1;
-    return fmi3OK;
+    ENTER(fmi3SetFMUState);
+    return result(M, cf_state_set(M, CALL_fmi3SetFMUState, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    if (instance == NULL || FMUState == NULL) {
-        return fmi3Error;
-    }
-    free(*FMUState);
-    *FMUState = NULL;
-    return fmi3OK;
+    ENTER(fmi3FreeFMUState);
+    return result(M, cf_state_free(M, CALL_fmi3FreeFMUState, FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
     (void)FMUState;
-    if (instance == NULL || size == NULL) {
-        return fmi3Error;
-    }
-    *size = sizeof(ModelSnapshot);
-    return fmi3OK;
+    ENTER(fmi3SerializedFMUStateSize);
+    return result(M, cf_state_size(M, CALL_fmi3SerializedFMUStateSize, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
                                  size_t size) {
-    if (instance == NULL || FMUState == NULL || size < sizeof(ModelSnapshot)) {
-        return unsupported(instance, "fmi3SerializeFMUState with a buffer smaller than fmi3SerializedFMUStateSize");
-    }
-    memcpy(serializedState, FMUState, sizeof(ModelSnapshot));
-    return fmi3OK;
+    ENTER(fmi3SerializeFMUState);
+    return result(M, cf_state_serialize(M, CALL_fmi3SerializeFMUState, FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
-    if (instance == NULL || FMUState == NULL || size != sizeof(ModelSnapshot)) {
-        return unsupported(instance, "fmi3DeserializeFMUState of data of another size");
-    }
-    if (*FMUState == NULL) {
-        *FMUState = malloc(sizeof(ModelSnapshot));
-    }
-    if (*FMUState == NULL) {
-        return fmi3Error;
-    }
-    memcpy(*FMUState, serializedState, sizeof(ModelSnapshot));
-    return fmi3OK;
+    ENTER(fmi3DeserializeFMUState);
+    return result(M, cf_state_deserialize(M, CALL_fmi3DeserializeFMUState, serializedState, size, FMUState));
 }
 
 /* -- derivatives, clocks, model exchange: not offered ----------------------------------------- */
@@ -437,7 +383,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return unsupported(instance, "fmi3GetDirectionalDerivative");
+    return unsupported(instance, CALL_fmi3GetDirectionalDerivative);
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -451,15 +397,15 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return unsupported(instance, "fmi3GetAdjointDerivative");
+    return unsupported(instance, CALL_fmi3GetAdjointDerivative);
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EnterConfigurationMode");
+    return unsupported(instance, CALL_fmi3EnterConfigurationMode);
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3ExitConfigurationMode");
+    return unsupported(instance, CALL_fmi3ExitConfigurationMode);
 }
 
 fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -467,7 +413,7 @@ fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReferenc
     (void)vr;
     (void)intervals;
     (void)qualifiers;
-    return no_vars(instance, nvr, "fmi3GetIntervalDecimal");
+    return no_vars(instance, CALL_fmi3GetIntervalDecimal, nvr);
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -477,14 +423,14 @@ fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReferen
     (void)counters;
     (void)resolutions;
     (void)qualifiers;
-    return no_vars(instance, nvr, "fmi3GetIntervalFraction");
+    return no_vars(instance, CALL_fmi3GetIntervalFraction, nvr);
 }
 
 fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                fmi3Float64 shifts[]) {
     (void)vr;
     (void)shifts;
-    return no_vars(instance, nvr, "fmi3GetShiftDecimal");
+    return no_vars(instance, CALL_fmi3GetShiftDecimal, nvr);
 }
 
 fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -492,14 +438,14 @@ fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
     (void)vr;
     (void)counters;
     (void)resolutions;
-    return no_vars(instance, nvr, "fmi3GetShiftFraction");
+    return no_vars(instance, CALL_fmi3GetShiftFraction, nvr);
 }
 
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                   const fmi3Float64 intervals[]) {
     (void)vr;
     (void)intervals;
-    return no_vars(instance, nvr, "fmi3SetIntervalDecimal");
+    return no_vars(instance, CALL_fmi3SetIntervalDecimal, nvr);
 }
 
 fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -507,14 +453,14 @@ fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReferen
     (void)vr;
     (void)counters;
     (void)resolutions;
-    return no_vars(instance, nvr, "fmi3SetIntervalFraction");
+    return no_vars(instance, CALL_fmi3SetIntervalFraction, nvr);
 }
 
 fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                                const fmi3Float64 shifts[]) {
     (void)vr;
     (void)shifts;
-    return no_vars(instance, nvr, "fmi3SetShiftDecimal");
+    return no_vars(instance, CALL_fmi3SetShiftDecimal, nvr);
 }
 
 fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
@@ -522,11 +468,11 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference 
     (void)vr;
     (void)counters;
     (void)resolutions;
-    return no_vars(instance, nvr, "fmi3SetShiftFraction");
+    return no_vars(instance, CALL_fmi3SetShiftFraction, nvr);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EvaluateDiscreteStates");
+    return unsupported(instance, CALL_fmi3EvaluateDiscreteStates);
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
@@ -535,9 +481,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Float64 *nextEventTime) {
     int again = 0;
     Status status;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3UpdateDiscreteStates", PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3UpdateDiscreteStates);
     status = model_event_update(M, &again);
     model_outputs(M);
     M->outputs_stale = 0;
@@ -563,7 +507,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EnterContinuousTimeMode");
+    return unsupported(instance, CALL_fmi3EnterContinuousTimeMode);
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
@@ -571,68 +515,66 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
     (void)noSetFMUStatePriorToCurrentPoint;
     (void)enterEventMode;
     (void)terminateSimulation;
-    return unsupported(instance, "fmi3CompletedIntegratorStep");
+    return unsupported(instance, CALL_fmi3CompletedIntegratorStep);
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
     (void)time;
-    return unsupported(instance, "fmi3SetTime");
+    return unsupported(instance, CALL_fmi3SetTime);
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
     (void)continuousStates;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3SetContinuousStates");
+    return unsupported(instance, CALL_fmi3SetContinuousStates);
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
     (void)derivatives;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStateDerivatives");
+    return unsupported(instance, CALL_fmi3GetContinuousStateDerivatives);
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    return result(M, cf_event_indicators(M, eventIndicators, nEventIndicators));
+    ENTER(fmi3GetEventIndicators);
+    return result(M, cf_event_indicators(M, CALL_fmi3GetEventIndicators, eventIndicators, nEventIndicators));
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
     (void)continuousStates;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStates");
+    return unsupported(instance, CALL_fmi3GetContinuousStates);
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
     (void)nominals;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetNominalsOfContinuousStates");
+    return unsupported(instance, CALL_fmi3GetNominalsOfContinuousStates);
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
-    if (instance == NULL || nEventIndicators == NULL) {
-        return fmi3Error;
+    ENTER(fmi3GetNumberOfEventIndicators);
+    if (nEventIndicators == NULL) {
+        return result(M, cf_null_argument(M, CALL_fmi3GetNumberOfEventIndicators, "nEventIndicators"));
     }
     *nEventIndicators = N_EVENT_INDICATORS;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
-    if (instance == NULL || nContinuousStates == NULL) {
-        return fmi3Error;
+    ENTER(fmi3GetNumberOfContinuousStates);
+    if (nContinuousStates == NULL) {
+        return result(M, cf_null_argument(M, CALL_fmi3GetNumberOfContinuousStates, "nContinuousStates"));
     }
     *nContinuousStates = 0; /* co-simulation only: the states are internal to the model */
     return fmi3OK;
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterStepMode", PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterStepMode);
     M->phase = PH_STEP;
     return fmi3OK;
 }
@@ -644,7 +586,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
     (void)orders;
     (void)values;
     (void)nValues;
-    return unsupported(instance, "fmi3GetOutputDerivatives");
+    return unsupported(instance, CALL_fmi3GetOutputDerivatives);
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -655,10 +597,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     int event = 0;
     Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = cf_do_step(M, currentCommunicationPoint, communicationStepSize, &reached, &event);
+    ENTER(fmi3DoStep);
+    status = cf_do_step(M, CALL_fmi3DoStep, currentCommunicationPoint, communicationStepSize, &reached, &event);
     if (eventHandlingNeeded != NULL) {
         *eventHandlingNeeded = (event && M->event_mode_used) ? true : false;
     }
@@ -678,5 +618,5 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference 
                                       fmi3Float64 activationTime) {
     (void)clockReference;
     (void)activationTime;
-    return unsupported(instance, "fmi3ActivateModelPartition");
+    return unsupported(instance, CALL_fmi3ActivateModelPartition);
 }
