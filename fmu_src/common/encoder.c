@@ -1,7 +1,8 @@
-/* Quadrature encoder with exact edge instants, and the bracketing root finder the plants use.
+/* Quadrature encoder with exact edge instants.
  *
- * Shared by the Servo and Conveyor plants (`shared` in their model.toml): the build copies it and
- * encoder.h into each FMU's sources/, so every FMU stays complete on its own.
+ * Shared by the Servo and Conveyor plants (`shared` in their model.toml, with roots.c that it
+ * uses): the build copies it and encoder.h into each FMU's sources/, so every FMU stays complete
+ * on its own.
  *
  * The count is floor(position) with the position in counts: moving up, the count becomes n when
  * the position reaches n; moving down, it becomes n - 1 when the position drops below n. The
@@ -11,45 +12,6 @@
 #include <math.h>
 
 #include "cosim_fmu.h"
-
-static int crossed(double value, int strict) { return strict ? value > 0.0 : value >= 0.0; }
-
-double root_after(ScalarFn g, const void *ctx, double a, double ga, double b, double gb, int strict, double tol) {
-    /* Illinois variant of regula falsi; falls back to bisection when the bracket shrinks slowly. */
-    int side = 0, slow = 0, i;
-    if (crossed(ga, strict)) {
-        return a; /* not a bracket (rounding at a turning point): the nearer end is the best answer */
-    }
-    if (!crossed(gb, strict)) {
-        return b;
-    }
-    for (i = 0; i < 200 && b - a > tol; i++) {
-        const double width = b - a;
-        double t = (slow >= 2 || ga == gb) ? 0.5 * (a + b) : a + (b - a) * (ga / (ga - gb));
-        double gt;
-        if (!(t > a && t < b)) {
-            t = 0.5 * (a + b);
-        }
-        gt = g(ctx, t);
-        if (crossed(gt, strict)) {
-            b = t;
-            gb = gt;
-            if (side == 1) {
-                ga *= 0.5;
-            }
-            side = 1;
-        } else {
-            a = t;
-            ga = gt;
-            if (side == -1) {
-                gb *= 0.5;
-            }
-            side = -1;
-        }
-        slow = (b - a > 0.5 * width) ? slow + 1 : 0;
-    }
-    return b;
-}
 
 void encoder_start(Encoder *e, double position, double t) {
     e->count = (int64_t)floor(position);
