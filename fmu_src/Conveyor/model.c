@@ -18,6 +18,7 @@
 #include <math.h>
 
 #include "cosim_fmu.h"
+#include "grid.h"
 
 #define ROOT_TOL 1e-12 /* s: mark and encoder edges */
 #define TWO_PI 6.283185307179586
@@ -272,9 +273,8 @@ void model_outputs(ModelInstance *m) {
 
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
     ModelState *s = &m->s;
-    const double t0 = m->time;
-    double t = t0;
-    long k = 1;
+    double t = m->time, t_b;
+    Grid grid;
     Segment seg;
     *event = 0;
     *t_reached = t_end;
@@ -282,14 +282,9 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
         mark_edge(m, s->pending, m->time);
         s->pending = 0;
     }
-    while (t < t_end) {
-        const double t_grid = t0 + (double)k * s->h;
-        const double t_b = t_grid < t_end ? t_grid : t_end;
+    grid_start(&grid, m->time, s->h, t_end);
+    while (grid_next(&grid, t, &t_b)) {
         double t_event = 0.0;
-        if (t_b <= t) {
-            k++;
-            continue;
-        }
         segment_start(m, &seg, t);
         if (advance(m, &seg, t_b - t, t, &t_event)) {
             *t_reached = t + t_event;
@@ -297,7 +292,6 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
             return ST_OK;
         }
         t = t_b;
-        k++;
     }
     return ST_OK;
 }

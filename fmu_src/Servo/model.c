@@ -16,6 +16,7 @@
 #include <math.h>
 
 #include "cosim_fmu.h"
+#include "grid.h"
 
 #define ROOT_TOL 1e-12        /* s: switching instants and encoder edges */
 #define MAX_SWITCHES 1000000L /* per doStep: a guard against a model that chatters */
@@ -299,21 +300,16 @@ void model_outputs(ModelInstance *m) {
 
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
     ModelState *s = &m->s;
-    const double t0 = m->time;
-    double t = t0;
-    long k = 1, switches = 0;
+    double t = m->time, t_b;
+    long switches = 0;
+    Grid grid;
     Segment seg;
     *event = 0;
     *t_reached = t_end;
     seg.u = motor_voltage(m);
-    while (t < t_end) {
-        const double t_grid = t0 + (double)k * s->h;
-        const double t_b = t_grid < t_end ? t_grid : t_end;
+    grid_start(&grid, m->time, s->h, t_end);
+    while (grid_next(&grid, t, &t_b)) {
         double t_switch = 0.0;
-        if (t_b <= t) {
-            k++;
-            continue;
-        }
         if (s->stuck || s->w == 0.0) {
             if (!s->stuck || fabs(drive_torque(m, s->i)) > m->v.coulomb_friction) {
                 decide_at_rest(m); /* an input changed, or the rotor starts from rest */
@@ -330,7 +326,6 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
             continue;
         }
         t = t_b;
-        k++;
     }
     return ST_OK;
 }
