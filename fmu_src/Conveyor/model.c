@@ -83,19 +83,6 @@ static double seg_counts(const void *ctx, double t) {
     return seg_position(seg, t) * seg->cpm;
 }
 
-/* sgn * f(t): a zero crossing of f towards sgn, or past a boundary. */
-typedef struct {
-    const Segment *seg;
-    ScalarFn f;
-    double sgn;
-    double offset;
-} Signed;
-
-static double signed_value(const void *ctx, double t) {
-    const Signed *s = (const Signed *)ctx;
-    return s->sgn * (s->f(s->seg, t) - s->offset);
-}
-
 static double sign(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
 
 /* Where the sensor state changes next: [lo, hi) is the interval of the current state. */
@@ -136,12 +123,12 @@ static void set_state(ModelInstance *m, const Segment *seg, double t) {
 
 /* Root of the speed (or acceleration) between a and b where it changes sign. */
 static double sign_change(const Segment *seg, ScalarFn f, double a, double fa, double b, double fb) {
-    Signed z;
-    z.seg = seg;
+    Passing z;
     z.f = f;
-    z.sgn = sign(fb);
-    z.offset = 0.0;
-    return root_after(signed_value, &z, a, z.sgn * fa, b, z.sgn * fb, 1, ROOT_TOL);
+    z.ctx = seg;
+    z.level = 0.0;
+    z.dir = sign(fb);
+    return root_after(passing, &z, a, z.dir * fa, b, z.dir * fb, 1, ROOT_TOL);
 }
 
 /* Walk the monotonic piece [p, q] of a segment from t_origin: mark events and encoder edges.
@@ -151,35 +138,34 @@ static int walk_piece(ModelInstance *m, const Segment *seg, double p, double q, 
     const double xq = seg_position(seg, q);
     for (;;) {
         double lo, hi, te;
-        Signed past;
+        Passing past;
         mark_bounds(m, &lo, &hi);
-        past.seg = seg;
         past.f = seg_position;
+        past.ctx = seg;
         if (xq >= hi) {
-            past.sgn = 1.0;
-            past.offset = hi;
+            past.dir = 1.0;
+            past.level = hi;
         } else if (xq < lo) {
-            past.sgn = -1.0;
-            past.offset = lo;
+            past.dir = -1.0;
+            past.level = lo;
         } else {
             encoder_track(&s->enc, seg_counts, seg, p, q, xq * seg->cpm, t_origin, ROOT_TOL);
             return 0;
         }
-        te = root_after(signed_value, &past, p, signed_value(&past, p), q, signed_value(&past, q), past.sgn < 0.0,
-                        ROOT_TOL);
+        te = root_after(passing, &past, p, passing(&past, p), q, passing(&past, q), past.dir < 0.0, ROOT_TOL);
         encoder_track(&s->enc, seg_counts, seg, p, te, seg_counts(seg, te), t_origin, ROOT_TOL);
         if (m->early_return_allowed) {
             set_state(m, seg, te);
             if (m->event_mode_used) {
-                s->pending = (int)past.sgn; /* applied in event mode */
+                s->pending = (int)past.dir; /* applied in event mode */
             } else {
-                mark_edge(m, (int)past.sgn, t_origin + te);
+                mark_edge(m, (int)past.dir, t_origin + te);
             }
             *t_event = te;
             return 1;
         }
         s->x = seg_position(seg, te); /* for the log message only: the segment keeps its origin */
-        mark_edge(m, (int)past.sgn, t_origin + te);
+        mark_edge(m, (int)past.dir, t_origin + te);
         p = te;
     }
 }

@@ -139,16 +139,15 @@ static double past_breakaway(const void *ctx, double t) {
     return b->sgn * drive_torque(b->seg->m, seg_current(b->seg, t)) - b->seg->m->v.coulomb_friction;
 }
 
-/* sgn * f(t) for a function of a segment: a zero crossing of f towards sgn. */
-typedef struct {
-    const Segment *seg;
-    ScalarFn f;
-    double sgn;
-} Signed;
-
-static double signed_value(const void *ctx, double t) {
-    const Signed *s = (const Signed *)ctx;
-    return s->sgn * s->f(s->seg, t);
+/* The instant in [a, b] just after f (a function of the segment) changes sign, given f(a) = fa and
+ * f(b) = fb of opposite signs. */
+static double zero_crossing(const Segment *seg, ScalarFn f, double a, double fa, double b, double fb) {
+    Passing z;
+    z.f = f;
+    z.ctx = seg;
+    z.level = 0.0;
+    z.dir = sign(fb);
+    return root_after(passing, &z, a, z.dir * fa, b, z.dir * fb, 1, ROOT_TOL);
 }
 
 /* The rotor stands still (w == 0): stuck if static friction holds it, else the way it starts. */
@@ -200,11 +199,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
     {
         double acc0 = seg_accel(seg, 0.0), acc1 = seg_accel(seg, span);
         if (acc0 * acc1 < 0.0) {
-            Signed a;
-            a.seg = seg;
-            a.f = seg_accel;
-            a.sgn = sign(acc1);
-            cuts[n++] = root_after(signed_value, &a, 0.0, a.sgn * acc0, span, a.sgn * acc1, 1, ROOT_TOL);
+            cuts[n++] = zero_crossing(seg, seg_accel, 0.0, acc0, span, acc1);
         }
     }
     cuts[n++] = span;
@@ -215,17 +210,12 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
             s->dir = (int)sign(wq); /* without Coulomb friction the direction is only a label */
         }
         if ((double)s->dir * wq < 0.0) {
-            Signed w;
-            double tz;
-            w.seg = seg;
-            w.f = seg_speed;
-            w.sgn = -(double)s->dir;
-            tz = root_after(signed_value, &w, p, w.sgn * seg_speed(seg, p), q, w.sgn * wq, 1, ROOT_TOL);
+            const double tz = zero_crossing(seg, seg_speed, p, seg_speed(seg, p), q, wq);
             encoder_track(&s->enc, seg_counts, seg, p, tz, seg_counts(seg, tz), t_origin, ROOT_TOL);
             set_state(m, seg, tz);
             decide_at_rest(m);
             if (!s->stuck && s->dir == 0) {
-                s->dir = -(int)w.sgn; /* no friction and no drive: keeps turning the new way */
+                s->dir = -(int)sign(wq); /* no friction and no drive: keeps turning the new way */
             }
             *t_switch = tz;
             return 1;

@@ -21,30 +21,17 @@ void encoder_start(Encoder *e, double position, double t) {
     e->t_prev = t;
 }
 
-typedef struct {
-    ScalarFn position;
-    const void *ctx;
-    double boundary;
-    int down;
-} Crossing;
-
-/* > 0 (or >= 0 moving up) once the position has crossed the boundary. */
-static double past_boundary(const void *ctx, double t) {
-    const Crossing *c = (const Crossing *)ctx;
-    double p = c->position(c->ctx, t);
-    return c->down ? c->boundary - p : p - c->boundary;
-}
-
-static double crossing_time(const Crossing *c, double a, double b, double tol) {
-    double ga = past_boundary(c, a), gb = past_boundary(c, b);
-    return root_after(past_boundary, c, a, ga, b, gb, c->down, tol);
+/* The instant in [a, b] at which the position passes the boundary c->level. */
+static double crossing_time(const Passing *c, double a, double b, double tol) {
+    return root_after(passing, c, a, passing(c, a), b, passing(c, b), c->dir < 0.0, tol);
 }
 
 void encoder_track(Encoder *e, ScalarFn position, const void *ctx, double a, double b, double pb, double t_origin,
                    double tol) {
-    Crossing c;
+    Passing c;
     double whole = floor(pb);
     int64_t count;
+    int down;
     if (!(fabs(whole) < 9.0e18)) {
         return; /* beyond the range of the counter: the plant's checks keep positions finite */
     }
@@ -52,18 +39,19 @@ void encoder_track(Encoder *e, ScalarFn position, const void *ctx, double a, dou
     if (count == e->count) {
         return;
     }
-    c.position = position;
+    down = count < e->count;
+    c.f = position;
     c.ctx = ctx;
-    c.down = count < e->count;
-    c.boundary = (double)(c.down ? count + 1 : count);
+    c.dir = down ? -1.0 : 1.0;
+    c.level = (double)(down ? count + 1 : count);
     e->t_prev = e->t_last;
     e->t_last = t_origin + crossing_time(&c, a, b, tol);
-    if (c.down ? e->count - count >= 2 : count - e->count >= 2) {
-        c.boundary = (double)(c.down ? count + 2 : count - 1);
+    if (down ? e->count - count >= 2 : count - e->count >= 2) {
+        c.level = (double)(down ? count + 2 : count - 1);
         e->t_prev = t_origin + crossing_time(&c, a, b, tol);
     }
-    e->edge = c.down ? count + 1 : count;
-    e->direction = c.down ? -1 : 1;
+    e->edge = down ? count + 1 : count;
+    e->direction = down ? -1 : 1;
     e->count = count;
 }
 

@@ -39,3 +39,8 @@ double root_after(ScalarFn g, const void *ctx, double a, double ga, double b, do
     }
     return b;
 }
+
+double passing(const void *p, double t) {
+    const Passing *q = (const Passing *)p;
+    return q->dir * (q->f(q->ctx, t) - q->level);
+}

@@ -13,4 +13,15 @@ typedef double (*ScalarFn)(const void *ctx, double t);
  * bracket's upper end, a time at most tol after the crossing at which g has crossed. */
 double root_after(ScalarFn g, const void *ctx, double a, double ga, double b, double gb, int strict, double tol);
 
+/* f measured from a level in one direction, for root_after: passing(p, t) = dir * (f(t) - level)
+ * has crossed 0 once f has passed the level going up (dir = +1) or down (dir = -1). */
+typedef struct {
+    ScalarFn f;
+    const void *ctx;
+    double level;
+    double dir; /* +1 or -1 */
+} Passing;
+
+double passing(const void *p, double t);
+
 #endif
