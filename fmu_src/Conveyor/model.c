@@ -83,8 +83,6 @@ static double seg_counts(const void *ctx, double t) {
     return seg_position(seg, t) * seg->cpm;
 }
 
-static double sign(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
-
 /* Where the sensor state changes next: [lo, hi) is the interval of the current state. */
 static void mark_bounds(const ModelInstance *m, double *lo, double *hi) {
     const double start = m->v.mark_offset + (double)m->s.mark_k * m->v.mark_pitch;
@@ -119,16 +117,6 @@ static void mark_edge(ModelInstance *m, int dir, double t) {
 static void set_state(ModelInstance *m, const Segment *seg, double t) {
     m->s.x = seg_position(seg, t);
     m->s.v = seg_drive_speed(seg, t);
-}
-
-/* Root of the speed (or acceleration) between a and b where it changes sign. */
-static double sign_change(const Segment *seg, ScalarFn f, double a, double fa, double b, double fb) {
-    Passing z;
-    z.f = f;
-    z.ctx = seg;
-    z.level = 0.0;
-    z.dir = sign(fb);
-    return root_after(passing, &z, a, z.dir * fa, b, z.dir * fb, 1, ROOT_TOL);
 }
 
 /* Walk the monotonic piece [p, q] of a segment from t_origin: mark events and encoder edges.
@@ -177,7 +165,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
     const double acc0 = seg_accel(seg, 0.0), acc1 = seg_accel(seg, span);
     cuts[n++] = 0.0;
     if (acc0 * acc1 < 0.0) {
-        cuts[n++] = sign_change(seg, seg_accel, 0.0, acc0, span, acc1);
+        cuts[n++] = root_sign_change(seg_accel, seg, 0.0, acc0, span, acc1, ROOT_TOL);
     }
     cuts[n++] = span;
     /* the speed is monotonic between the cuts: at most one zero in each */
@@ -189,7 +177,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
             for (j = n; j > k + 1; j--) {
                 cuts[j] = cuts[j - 1];
             }
-            cuts[k + 1] = sign_change(seg, seg_speed, a, va, b, vb);
+            cuts[k + 1] = root_sign_change(seg_speed, seg, a, va, b, vb, ROOT_TOL);
             n++;
         }
     }

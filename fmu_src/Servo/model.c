@@ -139,17 +139,6 @@ static double past_breakaway(const void *ctx, double t) {
     return b->sgn * drive_torque(b->seg->m, seg_current(b->seg, t)) - b->seg->m->v.coulomb_friction;
 }
 
-/* The instant in [a, b] just after f (a function of the segment) changes sign, given f(a) = fa and
- * f(b) = fb of opposite signs. */
-static double zero_crossing(const Segment *seg, ScalarFn f, double a, double fa, double b, double fb) {
-    Passing z;
-    z.f = f;
-    z.ctx = seg;
-    z.level = 0.0;
-    z.dir = sign(fb);
-    return root_after(passing, &z, a, z.dir * fa, b, z.dir * fb, 1, ROOT_TOL);
-}
-
 /* The rotor stands still (w == 0): stuck if static friction holds it, else the way it starts. */
 static void decide_at_rest(ModelInstance *m) {
     ModelState *s = &m->s;
@@ -199,7 +188,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
     {
         double acc0 = seg_accel(seg, 0.0), acc1 = seg_accel(seg, span);
         if (acc0 * acc1 < 0.0) {
-            cuts[n++] = zero_crossing(seg, seg_accel, 0.0, acc0, span, acc1);
+            cuts[n++] = root_sign_change(seg_accel, seg, 0.0, acc0, span, acc1, ROOT_TOL);
         }
     }
     cuts[n++] = span;
@@ -210,7 +199,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
             s->dir = (int)sign(wq); /* without Coulomb friction the direction is only a label */
         }
         if ((double)s->dir * wq < 0.0) {
-            const double tz = zero_crossing(seg, seg_speed, p, seg_speed(seg, p), q, wq);
+            const double tz = root_sign_change(seg_speed, seg, p, seg_speed(seg, p), q, wq, ROOT_TOL);
             encoder_track(&s->enc, seg_counts, seg, p, tz, seg_counts(seg, tz), t_origin, ROOT_TOL);
             set_state(m, seg, tz);
             decide_at_rest(m);

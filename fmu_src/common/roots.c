@@ -44,3 +44,12 @@ double passing(const void *p, double t) {
     const Passing *q = (const Passing *)p;
     return q->dir * (q->f(q->ctx, t) - q->level);
 }
+
+double root_sign_change(ScalarFn f, const void *ctx, double a, double fa, double b, double fb, double tol) {
+    Passing z;
+    z.f = f;
+    z.ctx = ctx;
+    z.level = 0.0;
+    z.dir = fb > 0.0 ? 1.0 : (fb < 0.0 ? -1.0 : 0.0);
+    return root_after(passing, &z, a, z.dir * fa, b, z.dir * fb, 1, tol);
+}

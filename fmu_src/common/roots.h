@@ -24,4 +24,8 @@ typedef struct {
 
 double passing(const void *p, double t);
 
+/* The instant just after f changes sign in [a, b], where fa = f(a) and fb = f(b) have opposite
+ * signs: root_after on f signed towards the sign of fb (crossed: strictly past 0). */
+double root_sign_change(ScalarFn f, const void *ctx, double a, double fa, double b, double fb, double tol);
+
 #endif
