@@ -235,11 +235,8 @@ void model_outputs(ModelInstance *m) {
     m->v.position = s->x;
     m->v.speed = s->v + m->v.disturbance + ripple;
     m->v.drive_speed = s->v;
-    m->v.encoder_count = wrap_int32(s->enc.count);
-    m->v.edge_count = wrap_int32(s->enc.edge);
-    m->v.edge_direction = s->enc.direction;
-    m->v.t_last_edge = s->enc.t_last;
-    m->v.t_prev_edge = s->enc.t_prev;
+    encoder_outputs(&s->enc, &m->v.encoder_count, &m->v.edge_count, &m->v.edge_direction, &m->v.t_last_edge,
+                    &m->v.t_prev_edge);
     m->v.mark = s->mark_on;
     m->v.marks_seen = wrap_int32(s->marks_seen);
     m->v.t_last_mark = s->t_last_mark;

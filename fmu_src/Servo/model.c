@@ -270,11 +270,8 @@ void model_outputs(ModelInstance *m) {
     m->v.motor_voltage = motor_voltage(m);
     m->v.torque = m->v.torque_constant * s->i;
     m->v.stuck = s->stuck;
-    m->v.encoder_count = wrap_int32(s->enc.count);
-    m->v.edge_count = wrap_int32(s->enc.edge);
-    m->v.edge_direction = s->enc.direction;
-    m->v.t_last_edge = s->enc.t_last;
-    m->v.t_prev_edge = s->enc.t_prev;
+    encoder_outputs(&s->enc, &m->v.encoder_count, &m->v.edge_count, &m->v.edge_direction, &m->v.t_last_edge,
+                    &m->v.t_prev_edge);
 }
 
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
@@ -307,15 +304,4 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
         t = t_b;
     }
     return ST_OK;
-}
-
-Status model_event_update(ModelInstance *m, int *again) {
-    (void)m;
-    *again = 0;
-    return ST_OK;
-}
-
-void model_event_indicators(ModelInstance *m, double *z) {
-    (void)m;
-    (void)z;
 }

@@ -111,7 +111,8 @@ void model_outputs(ModelInstance *m);
 /* Advance from m->time to t_end [s]. May stop early at an internal event (sets *t_reached < t_end
  * and *event = 1) when m->early_return_allowed; otherwise it handles events internally. */
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event);
-/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration. */
+/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration.
+ * (A plant without events takes this and model_event_indicators from no_events.c.) */
 Status model_event_update(ModelInstance *m, int *again);
 /* Event indicator values at m->time (N_EVENT_INDICATORS of them). */
 void model_event_indicators(ModelInstance *m, double *z);

@@ -59,3 +59,12 @@ int32_t wrap_int32(int64_t value) {
     uint32_t low = (uint32_t)((uint64_t)value & 0xffffffffu);
     return low > 0x7fffffffu ? (int32_t)((int64_t)low - 4294967296LL) : (int32_t)low;
 }
+
+void encoder_outputs(const Encoder *e, int32_t *count, int32_t *edge, int32_t *direction, double *t_last,
+                     double *t_prev) {
+    *count = wrap_int32(e->count);
+    *edge = wrap_int32(e->edge);
+    *direction = e->direction;
+    *t_last = e->t_last;
+    *t_prev = e->t_prev;
+}

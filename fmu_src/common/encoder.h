@@ -22,5 +22,9 @@ void encoder_start(Encoder *e, double position, double t);
 void encoder_track(Encoder *e, ScalarFn position, const void *ctx, double a, double b, double pb, double t_origin,
                    double tol);
 int32_t wrap_int32(int64_t value);
+/* The encoder outputs of a plant: count and last edge (wrapped to Int32), its direction, the
+ * instants of the last two edges [s]. */
+void encoder_outputs(const Encoder *e, int32_t *count, int32_t *edge, int32_t *direction, double *t_last,
+                     double *t_prev);
 
 #endif
