@@ -37,12 +37,6 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
 
 static fmi2Status unsupported(fmi2Component c, FmiCall call) { return result(M, cf_unsupported(M, call)); }
 
-static fmi2Status unsupported_kind(ModelInstance *m, FmiCall call, fmi2StatusKind s) {
-    cf_log(m, ST_ERROR, "logStatusError", "%s: status kind %d is not supported by this FMU", cf_call_name(call),
-           (int)s);
-    return result(m, ST_ERROR);
-}
-
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 
 const char *fmi2GetVersion(void) { return fmi2Version; }
@@ -258,40 +252,48 @@ fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, CALL_fmi2Canc
 
 /* doStep never returns fmi2Pending or fmi2Discard: the status queries answer the two kinds an
  * importer asks after a step (last successful time, terminated) and refuse the others. */
+static Status status_query(fmi2Component c, FmiCall call, fmi2StatusKind s, fmi2StatusKind answered,
+                           const void *value) {
+    if (!cf_enter(M, call)) {
+        return ST_ERROR;
+    }
+    if (value == NULL) {
+        return cf_null_argument(M, call, "value");
+    }
+    if (s != answered) {
+        cf_log(M, ST_ERROR, "logStatusError", "%s: status kind %d is not supported by this FMU", cf_call_name(call),
+               (int)s);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    Status status = status_query(c, CALL_fmi2GetRealStatus, s, fmi2LastSuccessfulTime, value);
+    if (status == ST_OK) {
+        *value = M->time;
+    }
+    return result(M, status);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    Status status = status_query(c, CALL_fmi2GetBooleanStatus, s, fmi2Terminated, value);
+    if (status == ST_OK) {
+        *value = fmi2False; /* the model never asks to terminate */
+    }
+    return result(M, status);
+}
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     (void)s;
     (void)value;
     return unsupported(c, CALL_fmi2GetStatus);
 }
 
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    ENTER(fmi2GetRealStatus);
-    if (value == NULL) {
-        return result(M, cf_null_argument(M, CALL_fmi2GetRealStatus, "value"));
-    }
-    if (s != fmi2LastSuccessfulTime) {
-        return unsupported_kind(M, CALL_fmi2GetRealStatus, s);
-    }
-    *value = M->time;
-    return fmi2OK;
-}
-
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
     (void)s;
     (void)value;
     return unsupported(c, CALL_fmi2GetIntegerStatus);
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    ENTER(fmi2GetBooleanStatus);
-    if (value == NULL) {
-        return result(M, cf_null_argument(M, CALL_fmi2GetBooleanStatus, "value"));
-    }
-    if (s != fmi2Terminated) {
-        return unsupported_kind(M, CALL_fmi2GetBooleanStatus, s);
-    }
-    *value = fmi2False;
-    return fmi2OK;
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {

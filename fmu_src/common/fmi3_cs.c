@@ -250,72 +250,61 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     return fmi3OK;
 }
 
-/* Variable types no model has: fine for no variables, an error otherwise. */
-#define NO_GETTER(NAME, T)                                                                                           \
-    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T values[],           \
-                             size_t nValues) {                                                                       \
+/* The functions for variables no model has (the other types, binaries, clocks and their intervals
+ * and shifts): fine for no value references, an error otherwise. NO_VARIABLES_n defines one with
+ * n arguments after the value references. */
+#define NO_VARIABLES_1(NAME, T1)                                                                                     \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a) {                  \
         (void)vr;                                                                                                    \
-        (void)values;                                                                                                \
-        (void)nValues;                                                                                               \
-        return no_vars(instance, CALL_fmi3Get##NAME, nvr);                                                           \
+        (void)a;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
     }
-#define NO_SETTER(NAME, T)                                                                                           \
-    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const T values[],     \
-                             size_t nValues) {                                                                       \
+#define NO_VARIABLES_2(NAME, T1, T2)                                                                                 \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a, T2 b) {            \
         (void)vr;                                                                                                    \
-        (void)values;                                                                                                \
-        (void)nValues;                                                                                               \
-        return no_vars(instance, CALL_fmi3Set##NAME, nvr);                                                           \
+        (void)a;                                                                                                     \
+        (void)b;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
+    }
+#define NO_VARIABLES_3(NAME, T1, T2, T3)                                                                             \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a, T2 b, T3 c) {      \
+        (void)vr;                                                                                                    \
+        (void)a;                                                                                                     \
+        (void)b;                                                                                                     \
+        (void)c;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
     }
 
-NO_GETTER(Float32, fmi3Float32)
-NO_GETTER(Int8, fmi3Int8)
-NO_GETTER(UInt8, fmi3UInt8)
-NO_GETTER(Int16, fmi3Int16)
-NO_GETTER(UInt16, fmi3UInt16)
-NO_GETTER(UInt32, fmi3UInt32)
-NO_GETTER(Int64, fmi3Int64)
-NO_GETTER(UInt64, fmi3UInt64)
-NO_GETTER(String, fmi3String)
-NO_SETTER(Float32, fmi3Float32)
-NO_SETTER(Int8, fmi3Int8)
-NO_SETTER(UInt8, fmi3UInt8)
-NO_SETTER(Int16, fmi3Int16)
-NO_SETTER(UInt16, fmi3UInt16)
-NO_SETTER(UInt32, fmi3UInt32)
-NO_SETTER(Int64, fmi3Int64)
-NO_SETTER(UInt64, fmi3UInt64)
-NO_SETTER(String, fmi3String)
-
-fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
-                         fmi3Binary values[], size_t nValues) {
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return no_vars(instance, CALL_fmi3GetBinary, nvr);
-}
-
-fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
-                         const fmi3Binary values[], size_t nValues) {
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return no_vars(instance, CALL_fmi3SetBinary, nvr);
-}
-
-fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]) {
-    (void)vr;
-    (void)values;
-    return no_vars(instance, CALL_fmi3GetClock, nvr);
-}
-
-fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
-    (void)vr;
-    (void)values;
-    return no_vars(instance, CALL_fmi3SetClock, nvr);
-}
+NO_VARIABLES_2(GetFloat32, fmi3Float32 *, size_t)
+NO_VARIABLES_2(GetInt8, fmi3Int8 *, size_t)
+NO_VARIABLES_2(GetUInt8, fmi3UInt8 *, size_t)
+NO_VARIABLES_2(GetInt16, fmi3Int16 *, size_t)
+NO_VARIABLES_2(GetUInt16, fmi3UInt16 *, size_t)
+NO_VARIABLES_2(GetUInt32, fmi3UInt32 *, size_t)
+NO_VARIABLES_2(GetInt64, fmi3Int64 *, size_t)
+NO_VARIABLES_2(GetUInt64, fmi3UInt64 *, size_t)
+NO_VARIABLES_2(GetString, fmi3String *, size_t)
+NO_VARIABLES_3(GetBinary, size_t *, fmi3Binary *, size_t)
+NO_VARIABLES_2(SetFloat32, const fmi3Float32 *, size_t)
+NO_VARIABLES_2(SetInt8, const fmi3Int8 *, size_t)
+NO_VARIABLES_2(SetUInt8, const fmi3UInt8 *, size_t)
+NO_VARIABLES_2(SetInt16, const fmi3Int16 *, size_t)
+NO_VARIABLES_2(SetUInt16, const fmi3UInt16 *, size_t)
+NO_VARIABLES_2(SetUInt32, const fmi3UInt32 *, size_t)
+NO_VARIABLES_2(SetInt64, const fmi3Int64 *, size_t)
+NO_VARIABLES_2(SetUInt64, const fmi3UInt64 *, size_t)
+NO_VARIABLES_2(SetString, const fmi3String *, size_t)
+NO_VARIABLES_3(SetBinary, const size_t *, const fmi3Binary *, size_t)
+NO_VARIABLES_1(GetClock, fmi3Clock *)
+NO_VARIABLES_1(SetClock, const fmi3Clock *)
+NO_VARIABLES_2(GetIntervalDecimal, fmi3Float64 *, fmi3IntervalQualifier *)
+NO_VARIABLES_3(GetIntervalFraction, fmi3UInt64 *, fmi3UInt64 *, fmi3IntervalQualifier *)
+NO_VARIABLES_1(GetShiftDecimal, fmi3Float64 *)
+NO_VARIABLES_2(GetShiftFraction, fmi3UInt64 *, fmi3UInt64 *)
+NO_VARIABLES_1(SetIntervalDecimal, const fmi3Float64 *)
+NO_VARIABLES_2(SetIntervalFraction, const fmi3UInt64 *, const fmi3UInt64 *)
+NO_VARIABLES_1(SetShiftDecimal, const fmi3Float64 *)
+NO_VARIABLES_2(SetShiftFraction, const fmi3UInt64 *, const fmi3UInt64 *)
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
                                                size_t *nDependencies) {
@@ -406,69 +395,6 @@ fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
     return unsupported(instance, CALL_fmi3ExitConfigurationMode);
-}
-
-fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                  fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[]) {
-    (void)vr;
-    (void)intervals;
-    (void)qualifiers;
-    return no_vars(instance, CALL_fmi3GetIntervalDecimal, nvr);
-}
-
-fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                   fmi3UInt64 counters[], fmi3UInt64 resolutions[],
-                                   fmi3IntervalQualifier qualifiers[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    (void)qualifiers;
-    return no_vars(instance, CALL_fmi3GetIntervalFraction, nvr);
-}
-
-fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                               fmi3Float64 shifts[]) {
-    (void)vr;
-    (void)shifts;
-    return no_vars(instance, CALL_fmi3GetShiftDecimal, nvr);
-}
-
-fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                fmi3UInt64 counters[], fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, CALL_fmi3GetShiftFraction, nvr);
-}
-
-fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                  const fmi3Float64 intervals[]) {
-    (void)vr;
-    (void)intervals;
-    return no_vars(instance, CALL_fmi3SetIntervalDecimal, nvr);
-}
-
-fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                   const fmi3UInt64 counters[], const fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, CALL_fmi3SetIntervalFraction, nvr);
-}
-
-fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                               const fmi3Float64 shifts[]) {
-    (void)vr;
-    (void)shifts;
-    return no_vars(instance, CALL_fmi3SetShiftDecimal, nvr);
-}
-
-fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                const fmi3UInt64 counters[], const fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, CALL_fmi3SetShiftFraction, nvr);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
