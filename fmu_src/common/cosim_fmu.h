@@ -71,8 +71,9 @@ struct ModelInstance {
 };
 
 /* -- shared helpers (cosim_fmu.c) ------------------------------------------------------------ */
-/* The FMI wrappers call these after their entry check (cf_enter); `call` names the function in
- * messages. A status of ST_ERROR or ST_FATAL has already put the instance in that state. */
+/* The FMI wrappers call these after their entry check (cf_enter): none of them looks at the
+ * instance's state. `call` names the FMI function in messages. The wrappers pass every status they
+ * return through cf_result. */
 ModelInstance *cf_new(const char *instance_name);
 void cf_free(ModelInstance *m);
 void cf_defaults(ModelInstance *m);
@@ -84,9 +85,9 @@ void cf_log(ModelInstance *m, Status status, const char *category, const char *f
 /* The state after a call that returns `status`: the error (fatal) state for ST_ERROR (ST_FATAL). */
 Status cf_result(ModelInstance *m, Status status);
 Status cf_null_argument(ModelInstance *m, FmiCall call, const char *argument);
-/* Entry check, then an error: for FMI functions these FMUs do not offer. */
+/* An error: for FMI functions these FMUs do not offer. */
 Status cf_unsupported(ModelInstance *m, FmiCall call);
-/* Entry check, then fine for n == 0 and an error otherwise: for variable types no model has. */
+/* Fine for n == 0, an error otherwise: for variable types no model has. */
 Status cf_no_vars(ModelInstance *m, FmiCall call, size_t n);
 Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, void *values);
 Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, const void *values);

@@ -35,7 +35,13 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
     cb->logger(cb->componentEnvironment, m->instance_name, (fmi2Status)status, category, format);
 }
 
-static fmi2Status unsupported(fmi2Component c, FmiCall call) { return result(M, cf_unsupported(M, call)); }
+/* The entry check, then an error: for the functions these FMUs do not offer. */
+static fmi2Status unsupported(fmi2Component c, FmiCall call) {
+    if (!cf_enter(M, call)) {
+        return fmi2Error;
+    }
+    return result(M, cf_unsupported(M, call));
+}
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
 
@@ -148,6 +154,7 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
     (void)vr;
     (void)value;
+    ENTER(fmi2GetString);
     return result(M, cf_no_vars(M, CALL_fmi2GetString, nvr));
 }
 
@@ -169,6 +176,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     (void)vr;
     (void)value;
+    ENTER(fmi2SetString);
     return result(M, cf_no_vars(M, CALL_fmi2SetString, nvr));
 }
 
@@ -252,6 +260,7 @@ fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, CALL_fmi2Canc
 
 /* doStep never returns fmi2Pending or fmi2Discard: the status queries answer the two kinds an
  * importer asks after a step (last successful time, terminated) and refuse the others. */
+/* The entry check and the arguments of a status query that answers one status kind. */
 static Status status_query(fmi2Component c, FmiCall call, fmi2StatusKind s, fmi2StatusKind answered,
                            const void *value) {
     if (!cf_enter(M, call)) {

@@ -26,9 +26,19 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
     }
 }
 
-static fmi3Status unsupported(fmi3Instance instance, FmiCall call) { return result(M, cf_unsupported(M, call)); }
+/* The entry check, then an error: for the functions these FMUs do not offer. */
+static fmi3Status unsupported(fmi3Instance instance, FmiCall call) {
+    if (!cf_enter(M, call)) {
+        return fmi3Error;
+    }
+    return result(M, cf_unsupported(M, call));
+}
 
+/* The entry check, then fine for no value references: for variables no model has. */
 static fmi3Status no_vars(fmi3Instance instance, FmiCall call, size_t nvr) {
+    if (!cf_enter(M, call)) {
+        return fmi3Error;
+    }
     return result(M, cf_no_vars(M, call, nvr));
 }
 
