@@ -105,7 +105,8 @@ Status cf_state_deserialize(ModelInstance *m, FmiCall call, const unsigned char 
 /* -- the plant model (model.c) -------------------------------------------------------------- */
 /* Initial internal state, after the parameters are final (exit initialisation mode). */
 Status model_init(ModelInstance *m);
-/* Extra checks across variables (cf_check_all has already checked each value's range). */
+/* Extra checks across variables (each value's own range is already checked on every set and at exit
+ * initialisation mode). */
 Status model_check(ModelInstance *m);
 /* Compute outputs at m->time from the state and the current inputs. */
 void model_outputs(ModelInstance *m);
