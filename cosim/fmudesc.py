@@ -361,10 +361,12 @@ def build_description_fmi3(spec: ModelSpec) -> str:
 """
 
 
-COMMON_SOURCES = ("cosim_fmu.h", "cosim_fmu.c")
+#: Files of ``fmu_src/common/`` that every FMU holds: the model interface and the FMI call-state table.
+COMMON_SOURCES = ("cosim_fmu.h", "cosim_fmu.c", "fmi_calls.h", "fmi_calls.c")
 
 
 def sources_for(spec: ModelSpec, fmi_version: int) -> list[str]:
     """The C files compiled for one FMI version (headers are in the same folder)."""
     shared = [name for name in spec.shared if name.endswith(".c")]
-    return [*spec.sources, *shared, "model_vars.c", "cosim_fmu.c", f"fmi{fmi_version}_cs.c"]
+    common = [name for name in COMMON_SOURCES if name.endswith(".c")]
+    return [*spec.sources, *shared, "model_vars.c", *common, f"fmi{fmi_version}_cs.c"]

@@ -18,6 +18,7 @@
 #include <math.h>
 
 #include "cosim_fmu.h"
+#include "grid.h"
 
 #define ROOT_TOL 1e-12 /* s: mark and encoder edges */
 #define TWO_PI 6.283185307179586
@@ -82,21 +83,6 @@ static double seg_counts(const void *ctx, double t) {
     return seg_position(seg, t) * seg->cpm;
 }
 
-/* sgn * f(t): a zero crossing of f towards sgn, or past a boundary. */
-typedef struct {
-    const Segment *seg;
-    ScalarFn f;
-    double sgn;
-    double offset;
-} Signed;
-
-static double signed_value(const void *ctx, double t) {
-    const Signed *s = (const Signed *)ctx;
-    return s->sgn * (s->f(s->seg, t) - s->offset);
-}
-
-static double sign(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
-
 /* Where the sensor state changes next: [lo, hi) is the interval of the current state. */
 static void mark_bounds(const ModelInstance *m, double *lo, double *hi) {
     const double start = m->v.mark_offset + (double)m->s.mark_k * m->v.mark_pitch;
@@ -133,16 +119,6 @@ static void set_state(ModelInstance *m, const Segment *seg, double t) {
     m->s.v = seg_drive_speed(seg, t);
 }
 
-/* Root of the speed (or acceleration) between a and b where it changes sign. */
-static double sign_change(const Segment *seg, ScalarFn f, double a, double fa, double b, double fb) {
-    Signed z;
-    z.seg = seg;
-    z.f = f;
-    z.sgn = sign(fb);
-    z.offset = 0.0;
-    return root_after(signed_value, &z, a, z.sgn * fa, b, z.sgn * fb, 1, ROOT_TOL);
-}
-
 /* Walk the monotonic piece [p, q] of a segment from t_origin: mark events and encoder edges.
  * Returns 1 if the step must end at a mark edge (early return), with the state there. */
 static int walk_piece(ModelInstance *m, const Segment *seg, double p, double q, double t_origin, double *t_event) {
@@ -150,35 +126,34 @@ static int walk_piece(ModelInstance *m, const Segment *seg, double p, double q, 
     const double xq = seg_position(seg, q);
     for (;;) {
         double lo, hi, te;
-        Signed past;
+        Passing past;
         mark_bounds(m, &lo, &hi);
-        past.seg = seg;
         past.f = seg_position;
+        past.ctx = seg;
         if (xq >= hi) {
-            past.sgn = 1.0;
-            past.offset = hi;
+            past.dir = 1.0;
+            past.level = hi;
         } else if (xq < lo) {
-            past.sgn = -1.0;
-            past.offset = lo;
+            past.dir = -1.0;
+            past.level = lo;
         } else {
             encoder_track(&s->enc, seg_counts, seg, p, q, xq * seg->cpm, t_origin, ROOT_TOL);
             return 0;
         }
-        te = root_after(signed_value, &past, p, signed_value(&past, p), q, signed_value(&past, q), past.sgn < 0.0,
-                        ROOT_TOL);
+        te = root_after(passing, &past, p, passing(&past, p), q, passing(&past, q), past.dir < 0.0, ROOT_TOL);
         encoder_track(&s->enc, seg_counts, seg, p, te, seg_counts(seg, te), t_origin, ROOT_TOL);
         if (m->early_return_allowed) {
             set_state(m, seg, te);
             if (m->event_mode_used) {
-                s->pending = (int)past.sgn; /* applied in event mode */
+                s->pending = (int)past.dir; /* applied in event mode */
             } else {
-                mark_edge(m, (int)past.sgn, t_origin + te);
+                mark_edge(m, (int)past.dir, t_origin + te);
             }
             *t_event = te;
             return 1;
         }
         s->x = seg_position(seg, te); /* for the log message only: the segment keeps its origin */
-        mark_edge(m, (int)past.sgn, t_origin + te);
+        mark_edge(m, (int)past.dir, t_origin + te);
         p = te;
     }
 }
@@ -190,7 +165,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
     const double acc0 = seg_accel(seg, 0.0), acc1 = seg_accel(seg, span);
     cuts[n++] = 0.0;
     if (acc0 * acc1 < 0.0) {
-        cuts[n++] = sign_change(seg, seg_accel, 0.0, acc0, span, acc1);
+        cuts[n++] = root_sign_change(seg_accel, seg, 0.0, acc0, span, acc1, ROOT_TOL);
     }
     cuts[n++] = span;
     /* the speed is monotonic between the cuts: at most one zero in each */
@@ -202,7 +177,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
             for (j = n; j > k + 1; j--) {
                 cuts[j] = cuts[j - 1];
             }
-            cuts[k + 1] = sign_change(seg, seg_speed, a, va, b, vb);
+            cuts[k + 1] = root_sign_change(seg_speed, seg, a, va, b, vb, ROOT_TOL);
             n++;
         }
     }
@@ -260,11 +235,8 @@ void model_outputs(ModelInstance *m) {
     m->v.position = s->x;
     m->v.speed = s->v + m->v.disturbance + ripple;
     m->v.drive_speed = s->v;
-    m->v.encoder_count = wrap_int32(s->enc.count);
-    m->v.edge_count = wrap_int32(s->enc.edge);
-    m->v.edge_direction = s->enc.direction;
-    m->v.t_last_edge = s->enc.t_last;
-    m->v.t_prev_edge = s->enc.t_prev;
+    encoder_outputs(&s->enc, &m->v.encoder_count, &m->v.edge_count, &m->v.edge_direction, &m->v.t_last_edge,
+                    &m->v.t_prev_edge);
     m->v.mark = s->mark_on;
     m->v.marks_seen = wrap_int32(s->marks_seen);
     m->v.t_last_mark = s->t_last_mark;
@@ -272,9 +244,8 @@ void model_outputs(ModelInstance *m) {
 
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
     ModelState *s = &m->s;
-    const double t0 = m->time;
-    double t = t0;
-    long k = 1;
+    double t = m->time, t_b;
+    Grid grid;
     Segment seg;
     *event = 0;
     *t_reached = t_end;
@@ -282,14 +253,9 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
         mark_edge(m, s->pending, m->time);
         s->pending = 0;
     }
-    while (t < t_end) {
-        const double t_grid = t0 + (double)k * s->h;
-        const double t_b = t_grid < t_end ? t_grid : t_end;
+    grid_start(&grid, m->time, s->h, t_end);
+    while (grid_next(&grid, t, &t_b)) {
         double t_event = 0.0;
-        if (t_b <= t) {
-            k++;
-            continue;
-        }
         segment_start(m, &seg, t);
         if (advance(m, &seg, t_b - t, t, &t_event)) {
             *t_reached = t + t_event;
@@ -297,7 +263,6 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
             return ST_OK;
         }
         t = t_b;
-        k++;
     }
     return ST_OK;
 }

@@ -131,14 +131,3 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
     s->mod_prev = level(m, ub, 1);
     return ST_OK;
 }
-
-Status model_event_update(ModelInstance *m, int *again) {
-    (void)m;
-    *again = 0;
-    return ST_OK;
-}
-
-void model_event_indicators(ModelInstance *m, double *z) {
-    (void)m;
-    (void)z;
-}

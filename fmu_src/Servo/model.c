@@ -16,6 +16,7 @@
 #include <math.h>
 
 #include "cosim_fmu.h"
+#include "grid.h"
 
 #define ROOT_TOL 1e-12        /* s: switching instants and encoder edges */
 #define MAX_SWITCHES 1000000L /* per doStep: a guard against a model that chatters */
@@ -138,18 +139,6 @@ static double past_breakaway(const void *ctx, double t) {
     return b->sgn * drive_torque(b->seg->m, seg_current(b->seg, t)) - b->seg->m->v.coulomb_friction;
 }
 
-/* sgn * f(t) for a function of a segment: a zero crossing of f towards sgn. */
-typedef struct {
-    const Segment *seg;
-    ScalarFn f;
-    double sgn;
-} Signed;
-
-static double signed_value(const void *ctx, double t) {
-    const Signed *s = (const Signed *)ctx;
-    return s->sgn * s->f(s->seg, t);
-}
-
 /* The rotor stands still (w == 0): stuck if static friction holds it, else the way it starts. */
 static void decide_at_rest(ModelInstance *m) {
     ModelState *s = &m->s;
@@ -199,11 +188,7 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
     {
         double acc0 = seg_accel(seg, 0.0), acc1 = seg_accel(seg, span);
         if (acc0 * acc1 < 0.0) {
-            Signed a;
-            a.seg = seg;
-            a.f = seg_accel;
-            a.sgn = sign(acc1);
-            cuts[n++] = root_after(signed_value, &a, 0.0, a.sgn * acc0, span, a.sgn * acc1, 1, ROOT_TOL);
+            cuts[n++] = root_sign_change(seg_accel, seg, 0.0, acc0, span, acc1, ROOT_TOL);
         }
     }
     cuts[n++] = span;
@@ -214,17 +199,12 @@ static int advance(ModelInstance *m, const Segment *seg, double span, double t_o
             s->dir = (int)sign(wq); /* without Coulomb friction the direction is only a label */
         }
         if ((double)s->dir * wq < 0.0) {
-            Signed w;
-            double tz;
-            w.seg = seg;
-            w.f = seg_speed;
-            w.sgn = -(double)s->dir;
-            tz = root_after(signed_value, &w, p, w.sgn * seg_speed(seg, p), q, w.sgn * wq, 1, ROOT_TOL);
+            const double tz = root_sign_change(seg_speed, seg, p, seg_speed(seg, p), q, wq, ROOT_TOL);
             encoder_track(&s->enc, seg_counts, seg, p, tz, seg_counts(seg, tz), t_origin, ROOT_TOL);
             set_state(m, seg, tz);
             decide_at_rest(m);
             if (!s->stuck && s->dir == 0) {
-                s->dir = -(int)w.sgn; /* no friction and no drive: keeps turning the new way */
+                s->dir = -(int)sign(wq); /* no friction and no drive: keeps turning the new way */
             }
             *t_switch = tz;
             return 1;
@@ -290,30 +270,22 @@ void model_outputs(ModelInstance *m) {
     m->v.motor_voltage = motor_voltage(m);
     m->v.torque = m->v.torque_constant * s->i;
     m->v.stuck = s->stuck;
-    m->v.encoder_count = wrap_int32(s->enc.count);
-    m->v.edge_count = wrap_int32(s->enc.edge);
-    m->v.edge_direction = s->enc.direction;
-    m->v.t_last_edge = s->enc.t_last;
-    m->v.t_prev_edge = s->enc.t_prev;
+    encoder_outputs(&s->enc, &m->v.encoder_count, &m->v.edge_count, &m->v.edge_direction, &m->v.t_last_edge,
+                    &m->v.t_prev_edge);
 }
 
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
     ModelState *s = &m->s;
-    const double t0 = m->time;
-    double t = t0;
-    long k = 1, switches = 0;
+    double t = m->time, t_b;
+    long switches = 0;
+    Grid grid;
     Segment seg;
     *event = 0;
     *t_reached = t_end;
     seg.u = motor_voltage(m);
-    while (t < t_end) {
-        const double t_grid = t0 + (double)k * s->h;
-        const double t_b = t_grid < t_end ? t_grid : t_end;
+    grid_start(&grid, m->time, s->h, t_end);
+    while (grid_next(&grid, t, &t_b)) {
         double t_switch = 0.0;
-        if (t_b <= t) {
-            k++;
-            continue;
-        }
         if (s->stuck || s->w == 0.0) {
             if (!s->stuck || fabs(drive_torque(m, s->i)) > m->v.coulomb_friction) {
                 decide_at_rest(m); /* an input changed, or the rotor starts from rest */
@@ -330,18 +302,6 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
             continue;
         }
         t = t_b;
-        k++;
     }
     return ST_OK;
-}
-
-Status model_event_update(ModelInstance *m, int *again) {
-    (void)m;
-    *again = 0;
-    return ST_OK;
-}
-
-void model_event_indicators(ModelInstance *m, double *z) {
-    (void)m;
-    (void)z;
 }

@@ -20,13 +20,15 @@
  * (t = a + (b - a) i / n) no longer than the bound of step_bound(). With L > 0 each rotor sub-step
  * integrates the two phase currents first, by RK4 on finer sub-steps of at most current_tau / 4
  * with the back-EMF linear in time over the rotor sub-step (from the state at its start and its
- * derivative); the rotor's stages take the currents at the middle and the end. Switch crossings are located by regula falsi (Illinois)
- * to a bracket narrower than EVENT_TOL; with FMI 3.0 early return the step stops just after the
- * crossing, otherwise the step goes on. */
+ * derivative); the rotor's stages take the currents at the middle and the end. Switch crossings
+ * are located by the shared root finder (root_after, roots.c: regula falsi, Illinois, with
+ * bisection) to a bracket narrower than EVENT_TOL; with FMI 3.0 early return the step stops just
+ * after the crossing, otherwise the step goes on. */
 #include <math.h>
 #include <stdint.h>
 
 #include "cosim_fmu.h"
+#include "roots.h"
 
 #define TWO_PI 6.283185307179586
 #define PULSE_EPS 1e-11  /* [s] a pulse this close to a step boundary lies on it */
@@ -258,42 +260,35 @@ static void switch_indicators(const ModelInstance *m, double theta, double *z) {
     z[2] = m->v.home_at_positive_end ? x - m->v.home_position : m->v.home_position - x;
 }
 
-/* Time s in (0, h] just after switch k's crossing in the sub-step x0 -> rk4(x0, h). */
-static double locate_crossing(const ModelInstance *m, const Dynamics *d, const MotorState *x0, double h, int k) {
-    double z[N_SWITCHES], lo = 0.0, hi = h, zlo, zhi;
-    int side = 0, i;
+/* A switch indicator over one sub-step from x0, signed so that it has crossed once > 0 (or >= 0). */
+typedef struct {
+    const ModelInstance *m;
+    const Dynamics *d;
+    const MotorState *x0;
+    int k;       /* which switch */
+    double sign; /* +1: z_k rises through 0 (tripped at >= 0), -1: it falls below 0 */
+} Crossing;
+
+static double crossing_value(const void *ctx, double s) {
+    const Crossing *c = (const Crossing *)ctx;
+    double z[N_SWITCHES];
     MotorState x;
-    switch_indicators(m, x0->theta, z);
-    zlo = z[k];
-    rk4(d, x0, h, &x);
-    switch_indicators(m, x.theta, z);
-    zhi = z[k];
-    for (i = 0; i < 200 && hi - lo > EVENT_TOL; i++) {
-        double s = (i % 4 == 3 || zlo == zhi) ? 0.5 * (lo + hi) : (zlo * hi - zhi * lo) / (zlo - zhi);
-        double zs;
-        if (!(s > lo && s < hi)) {
-            s = 0.5 * (lo + hi);
-        }
-        rk4(d, x0, s, &x);
-        switch_indicators(m, x.theta, z);
-        zs = z[k];
-        if ((zs >= 0.0) == (zhi >= 0.0)) {
-            hi = s;
-            zhi = zs;
-            if (side == 1) {
-                zlo *= 0.5; /* Illinois: the same end moved twice */
-            }
-            side = 1;
-        } else {
-            lo = s;
-            zlo = zs;
-            if (side == -1) {
-                zhi *= 0.5;
-            }
-            side = -1;
-        }
-    }
-    return hi;
+    rk4(c->d, c->x0, s, &x);
+    switch_indicators(c->m, x.theta, z);
+    return c->sign * z[c->k];
+}
+
+/* Time s in (0, h] just after switch k's crossing in the sub-step x0 -> rk4(x0, h), where the
+ * indicator is z0 at the start and z1 (on the other side of 0) at the end. */
+static double locate_crossing(const ModelInstance *m, const Dynamics *d, const MotorState *x0, double h, int k,
+                              double z0, double z1) {
+    Crossing c;
+    c.m = m;
+    c.d = d;
+    c.x0 = x0;
+    c.k = k;
+    c.sign = z1 >= 0.0 ? 1.0 : -1.0;
+    return root_after(crossing_value, &c, 0.0, c.sign * z0, h, c.sign * z1, c.sign < 0.0, EVENT_TOL);
 }
 
 /* Integrate from a to b (no pulse in between). With stop_at_events, stop just after the first
@@ -319,7 +314,7 @@ static int integrate(ModelInstance *m, const Dynamics *d, double a, double b, in
                 switch_indicators(m, x1.theta, z1);
                 for (k = 0; k < N_SWITCHES; k++) {
                     if ((z0[k] >= 0.0) != (z1[k] >= 0.0)) {
-                        const double s = locate_crossing(m, d, &m->s.x, t1 - t0, k);
+                        const double s = locate_crossing(m, d, &m->s.x, t1 - t0, k, z0[k], z1[k]);
                         if (first < 0.0 || s < first) {
                             first = s;
                         }

@@ -1,4 +1,5 @@
-/* Shared helpers of the cosim plant FMUs: instances, typed access with range checks, stepping. */
+/* Shared helpers of the cosim plant FMUs: instances, typed access with range checks, stepping,
+ * FMU state snapshots. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -58,21 +59,34 @@ void cf_log(ModelInstance *m, Status status, const char *category, const char *f
     m->log_sink(m, status, category, message);
 }
 
-int cf_phase_allows(ModelInstance *m, const char *fn, int allowed_mask) {
-    static const char *const PHASE_NAME[] = {"instantiated", "initialization mode", "step mode",
-                                             "event mode", "terminated", "error"};
-    if (m->phase == PH_ERROR) {
-        cf_log(m, ST_ERROR, "logStatusError", "%s: the instance is in the error state after an earlier error", fn);
-        return 0;
+Status cf_result(ModelInstance *m, Status status) {
+    if (m != NULL && status == ST_FATAL) {
+        m->phase = PH_FATAL;
+    } else if (m != NULL && status == ST_ERROR && m->phase != PH_FATAL) {
+        m->phase = PH_ERROR;
     }
-    if (!(allowed_mask & PH_MASK(m->phase))) {
-        cf_log(m, ST_ERROR, "logStatusError", "%s must not be called in %s", fn, PHASE_NAME[m->phase]);
-        return 0;
-    }
-    return 1;
+    return status;
 }
 
-const VarDef *cf_var(ModelInstance *m, unsigned vr, VarType type, const char *fn) {
+Status cf_null_argument(ModelInstance *m, FmiCall call, const char *argument) {
+    cf_log(m, ST_ERROR, "logStatusError", "%s: argument %s must not be NULL", cf_call_name(call), argument);
+    return ST_ERROR;
+}
+
+Status cf_unsupported(ModelInstance *m, FmiCall call) {
+    cf_log(m, ST_ERROR, "logStatusError", "%s is not supported by this FMU", cf_call_name(call));
+    return ST_ERROR;
+}
+
+Status cf_no_vars(ModelInstance *m, FmiCall call, size_t n) {
+    if (n == 0) {
+        return ST_OK;
+    }
+    cf_log(m, ST_ERROR, "logStatusError", "%s: the model has no variables of this type", cf_call_name(call));
+    return ST_ERROR;
+}
+
+static const VarDef *find_var(ModelInstance *m, unsigned vr, VarType type, const char *fn) {
     size_t i;
     for (i = 0; i < N_MODEL_VARS; i++) {
         if (MODEL_VARS[i].vr == vr) {
@@ -143,7 +157,7 @@ static double as_double(const VarDef *d, const void *p) {
     }
 }
 
-Status cf_check_all(ModelInstance *m) {
+static Status check_all(ModelInstance *m) {
     size_t i;
     for (i = 0; i < N_MODEL_VARS; i++) {
         const VarDef *d = &MODEL_VARS[i];
@@ -155,22 +169,18 @@ Status cf_check_all(ModelInstance *m) {
     return model_check(m);
 }
 
-Status cf_get(ModelInstance *m, VarType type, const unsigned *vr, size_t n, void *values, const char *fn) {
+Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, void *values) {
+    const char *fn = cf_call_name(call);
     size_t i;
-    if (!cf_phase_allows(m, fn, PH_MASK(PH_INSTANTIATED) | PH_MASK(PH_INITIALIZATION) | PH_MASK(PH_STEP) |
-                                    PH_MASK(PH_EVENT) | PH_MASK(PH_TERMINATED))) {
-        return ST_ERROR;
-    }
     if (n > 0 && (vr == NULL || values == NULL)) {
-        cf_log(m, ST_ERROR, "logStatusError", "%s: null pointer for %lu values", fn, (unsigned long)n);
-        return ST_ERROR;
+        return cf_null_argument(m, call, vr == NULL ? "vr" : "values");
     }
     if (m->outputs_stale && m->phase != PH_INSTANTIATED) {
         model_outputs(m);
         m->outputs_stale = 0;
     }
     for (i = 0; i < n; i++) {
-        const VarDef *d = cf_var(m, vr[i], type, fn);
+        const VarDef *d = find_var(m, vr[i], type, fn);
         if (d == NULL) {
             return ST_ERROR;
         }
@@ -193,18 +203,14 @@ Status cf_get(ModelInstance *m, VarType type, const unsigned *vr, size_t n, void
     return ST_OK;
 }
 
-Status cf_set(ModelInstance *m, VarType type, const unsigned *vr, size_t n, const void *values, const char *fn) {
+Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, const void *values) {
+    const char *fn = cf_call_name(call);
     size_t i;
-    if (!cf_phase_allows(m, fn, PH_MASK(PH_INSTANTIATED) | PH_MASK(PH_INITIALIZATION) | PH_MASK(PH_STEP) |
-                                    PH_MASK(PH_EVENT))) {
-        return ST_ERROR;
-    }
     if (n > 0 && (vr == NULL || values == NULL)) {
-        cf_log(m, ST_ERROR, "logStatusError", "%s: null pointer for %lu values", fn, (unsigned long)n);
-        return ST_ERROR;
+        return cf_null_argument(m, call, vr == NULL ? "vr" : "values");
     }
     for (i = 0; i < n; i++) {
-        const VarDef *d = cf_var(m, vr[i], type, fn);
+        const VarDef *d = find_var(m, vr[i], type, fn);
         double value;
         if (d == NULL) {
             return ST_ERROR;
@@ -251,7 +257,7 @@ Status cf_set(ModelInstance *m, VarType type, const unsigned *vr, size_t n, cons
 }
 
 Status cf_exit_init(ModelInstance *m) {
-    Status status = cf_check_all(m);
+    Status status = check_all(m);
     if (status > ST_WARNING) {
         return status;
     }
@@ -264,23 +270,20 @@ Status cf_exit_init(ModelInstance *m) {
     return status;
 }
 
-Status cf_do_step(ModelInstance *m, double t_comm, double h, double *t_reached, int *event) {
+Status cf_do_step(ModelInstance *m, FmiCall call, double t_comm, double h, double *t_reached, int *event) {
     double tolerance = 1e-10 * (1.0 + fabs(m->time));
     Status status;
     *event = 0;
     *t_reached = m->time;
-    if (!cf_phase_allows(m, "doStep", PH_MASK(PH_STEP))) {
-        return ST_ERROR;
-    }
     if (!(h >= 0.0) || !isfinite(h)) {
-        cf_log(m, ST_ERROR, "logStatusError", "doStep: communicationStepSize = %.17g is not allowed (allowed: >= 0 s)",
-               h);
+        cf_log(m, ST_ERROR, "logStatusError", "%s: communicationStepSize = %.17g is not allowed (allowed: >= 0 s)",
+               cf_call_name(call), h);
         return ST_ERROR;
     }
     if (fabs(t_comm - m->time) > tolerance) {
         cf_log(m, ST_ERROR, "logStatusError",
-               "doStep: currentCommunicationPoint = %.17g s does not match the instance's time %.17g s", t_comm,
-               m->time);
+               "%s: currentCommunicationPoint = %.17g s does not match the instance's time %.17g s",
+               cf_call_name(call), t_comm, m->time);
         return ST_ERROR;
     }
     m->time = t_comm;
@@ -293,14 +296,104 @@ Status cf_do_step(ModelInstance *m, double t_comm, double h, double *t_reached, 
     return status;
 }
 
-Status cf_event_indicators(ModelInstance *m, double *z, size_t n) {
+Status cf_event_indicators(ModelInstance *m, FmiCall call, double *z, size_t n) {
     if (n != N_EVENT_INDICATORS) {
-        cf_log(m, ST_ERROR, "logStatusError", "getEventIndicators: asked for %lu indicators, the model has %d",
+        cf_log(m, ST_ERROR, "logStatusError", "%s: asked for %lu indicators, the model has %d", cf_call_name(call),
                (unsigned long)n, N_EVENT_INDICATORS);
         return ST_ERROR;
     }
     if (n > 0) {
         model_event_indicators(m, z);
     }
+    return ST_OK;
+}
+
+/* -- FMU state -------------------------------------------------------------------------------- */
+/* Everything a snapshot holds: the plain data of the instance (no pointers). */
+typedef struct {
+    Phase phase;
+    double time;
+    ModelData v;
+    ModelState s;
+} ModelSnapshot;
+
+Status cf_state_get(ModelInstance *m, FmiCall call, void **state) {
+    ModelSnapshot *snap;
+    if (state == NULL) {
+        return cf_null_argument(m, call, "FMUState");
+    }
+    snap = (ModelSnapshot *)(*state != NULL ? *state : malloc(sizeof(ModelSnapshot)));
+    if (snap == NULL) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: out of memory", cf_call_name(call));
+        return ST_ERROR;
+    }
+    snap->phase = m->phase;
+    snap->time = m->time;
+    snap->v = m->v;
+    snap->s = m->s;
+    *state = snap;
+    return ST_OK;
+}
+
+Status cf_state_set(ModelInstance *m, FmiCall call, const void *state) {
+    const ModelSnapshot *snap = (const ModelSnapshot *)state;
+    if (snap == NULL) {
+        return cf_null_argument(m, call, "FMUState");
+    }
+    m->phase = snap->phase;
+    m->time = snap->time;
+    m->v = snap->v;
+    m->s = snap->s;
+    m->outputs_stale = 1;
+    return ST_OK;
+}
+
+Status cf_state_free(ModelInstance *m, FmiCall call, void **state) {
+    if (state == NULL) {
+        return cf_null_argument(m, call, "FMUState");
+    }
+    free(*state);
+    *state = NULL;
+    return ST_OK;
+}
+
+Status cf_state_size(ModelInstance *m, FmiCall call, size_t *size) {
+    if (size == NULL) {
+        return cf_null_argument(m, call, "size");
+    }
+    *size = sizeof(ModelSnapshot);
+    return ST_OK;
+}
+
+Status cf_state_serialize(ModelInstance *m, FmiCall call, const void *state, unsigned char *bytes, size_t size) {
+    if (state == NULL || bytes == NULL) {
+        return cf_null_argument(m, call, state == NULL ? "FMUState" : "serializedState");
+    }
+    if (size < sizeof(ModelSnapshot)) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: size = %lu is not allowed (allowed: >= %lu, the serialized size)",
+               cf_call_name(call), (unsigned long)size, (unsigned long)sizeof(ModelSnapshot));
+        return ST_ERROR;
+    }
+    memcpy(bytes, state, sizeof(ModelSnapshot));
+    return ST_OK;
+}
+
+Status cf_state_deserialize(ModelInstance *m, FmiCall call, const unsigned char *bytes, size_t size, void **state) {
+    if (state == NULL || bytes == NULL) {
+        return cf_null_argument(m, call, state == NULL ? "FMUState" : "serializedState");
+    }
+    if (size != sizeof(ModelSnapshot)) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: size = %lu is not allowed (allowed: %lu, the serialized size)",
+               cf_call_name(call), (unsigned long)size, (unsigned long)sizeof(ModelSnapshot));
+        return ST_ERROR;
+    }
+    if (*state == NULL) {
+        *state = malloc(sizeof(ModelSnapshot));
+    }
+    if (*state == NULL) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: out of memory", cf_call_name(call));
+        return ST_ERROR;
+    }
+    memcpy(*state, bytes, sizeof(ModelSnapshot));
     return ST_OK;
 }

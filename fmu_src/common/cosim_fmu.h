@@ -3,8 +3,9 @@
  * A plant folder holds model.toml (its variables, from which the build generates model_vars.h,
  * model_vars.c and both modelDescription.xml files), model.h (its internal state) and model.c
  * (the functions declared at the end of this header). The wrappers fmi2_cs.c and fmi3_cs.c turn
- * those functions into the FMI API. Every instance owns all of its data: there is no global state,
- * so any number of instances can live in one process.
+ * those functions into the FMI API; every FMI function first asks the state table (fmi_calls.h)
+ * whether the instance's state allows the call. Every instance owns all of its data: there is no
+ * global state, so any number of instances can live in one process.
  */
 #ifndef COSIM_FMU_H
 #define COSIM_FMU_H
@@ -34,14 +35,18 @@ typedef struct {
 
 #include "model_vars.h" /* generated: ModelData, value references, MODEL_VARS, N_MODEL_VARS */
 #include "model.h"      /* the plant's internal state: ModelState */
+#include "fmi_calls.h" /* the state table: FmiCall, cf_enter */
 
+/* The state of an instance in the FMI state machines; which calls each allows: fmi_calls.h. */
 typedef enum {
     PH_INSTANTIATED,
     PH_INITIALIZATION,
     PH_STEP,
     PH_EVENT,
     PH_TERMINATED,
-    PH_ERROR
+    PH_ERROR,
+    PH_FATAL,
+    N_PHASES
 } Phase;
 
 typedef struct ModelInstance ModelInstance;
@@ -65,15 +70,10 @@ struct ModelInstance {
     ModelState s;             /* internal state of the plant */
 };
 
-/* Snapshot for get/set FMU state. */
-typedef struct {
-    Phase phase;
-    double time;
-    ModelData v;
-    ModelState s;
-} ModelSnapshot;
-
 /* -- shared helpers (cosim_fmu.c) ------------------------------------------------------------ */
+/* The FMI wrappers call these after their entry check (cf_enter): none of them looks at the
+ * instance's state. `call` names the FMI function in messages. The wrappers pass every status they
+ * return through cf_result. */
 ModelInstance *cf_new(const char *instance_name);
 void cf_free(ModelInstance *m);
 void cf_defaults(ModelInstance *m);
@@ -82,27 +82,39 @@ void cf_log(ModelInstance *m, Status status, const char *category, const char *f
     __attribute__((format(printf, 4, 5)))
 #endif
     ;
-const VarDef *cf_var(ModelInstance *m, unsigned vr, VarType type, const char *fn);
-Status cf_get(ModelInstance *m, VarType type, const unsigned *vr, size_t n, void *values, const char *fn);
-Status cf_set(ModelInstance *m, VarType type, const unsigned *vr, size_t n, const void *values, const char *fn);
-Status cf_check_all(ModelInstance *m);
+/* The state after a call that returns `status`: the error (fatal) state for ST_ERROR (ST_FATAL). */
+Status cf_result(ModelInstance *m, Status status);
+Status cf_null_argument(ModelInstance *m, FmiCall call, const char *argument);
+/* An error: for FMI functions these FMUs do not offer. */
+Status cf_unsupported(ModelInstance *m, FmiCall call);
+/* Fine for n == 0, an error otherwise: for variable types no model has. */
+Status cf_no_vars(ModelInstance *m, FmiCall call, size_t n);
+Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, void *values);
+Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, const void *values);
 Status cf_exit_init(ModelInstance *m);
-Status cf_do_step(ModelInstance *m, double t_comm, double h, double *t_reached, int *event);
-Status cf_event_indicators(ModelInstance *m, double *z, size_t n);
-int cf_phase_allows(ModelInstance *m, const char *fn, int allowed_mask);
-#define PH_MASK(p) (1 << (p))
+Status cf_do_step(ModelInstance *m, FmiCall call, double t_comm, double h, double *t_reached, int *event);
+Status cf_event_indicators(ModelInstance *m, FmiCall call, double *z, size_t n);
+/* FMU state: a snapshot is a plain copy of the instance's state, time and variables. */
+Status cf_state_get(ModelInstance *m, FmiCall call, void **state);
+Status cf_state_set(ModelInstance *m, FmiCall call, const void *state);
+Status cf_state_free(ModelInstance *m, FmiCall call, void **state);
+Status cf_state_size(ModelInstance *m, FmiCall call, size_t *size);
+Status cf_state_serialize(ModelInstance *m, FmiCall call, const void *state, unsigned char *bytes, size_t size);
+Status cf_state_deserialize(ModelInstance *m, FmiCall call, const unsigned char *bytes, size_t size, void **state);
 
 /* -- the plant model (model.c) -------------------------------------------------------------- */
 /* Initial internal state, after the parameters are final (exit initialisation mode). */
 Status model_init(ModelInstance *m);
-/* Extra checks across variables (cf_check_all has already checked each value's range). */
+/* Extra checks across variables (each value's own range is already checked on every set and at exit
+ * initialisation mode). */
 Status model_check(ModelInstance *m);
 /* Compute outputs at m->time from the state and the current inputs. */
 void model_outputs(ModelInstance *m);
 /* Advance from m->time to t_end [s]. May stop early at an internal event (sets *t_reached < t_end
  * and *event = 1) when m->early_return_allowed; otherwise it handles events internally. */
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event);
-/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration. */
+/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration.
+ * (A plant without events takes this and model_event_indicators from no_events.c.) */
 Status model_event_update(ModelInstance *m, int *again);
 /* Event indicator values at m->time (N_EVENT_INDICATORS of them). */
 void model_event_indicators(ModelInstance *m, double *z);

@@ -1,7 +1,8 @@
-/* Quadrature encoder with exact edge instants, and the bracketing root finder the plants use.
+/* Quadrature encoder with exact edge instants.
  *
- * Shared by the Servo and Conveyor plants (`shared` in their model.toml): the build copies it and
- * encoder.h into each FMU's sources/, so every FMU stays complete on its own.
+ * Shared by the Servo and Conveyor plants (`shared` in their model.toml, with roots.c that it
+ * uses): the build copies it and encoder.h into each FMU's sources/, so every FMU stays complete
+ * on its own.
  *
  * The count is floor(position) with the position in counts: moving up, the count becomes n when
  * the position reaches n; moving down, it becomes n - 1 when the position drops below n. The
@@ -12,45 +13,6 @@
 
 #include "cosim_fmu.h"
 
-static int crossed(double value, int strict) { return strict ? value > 0.0 : value >= 0.0; }
-
-double root_after(ScalarFn g, const void *ctx, double a, double ga, double b, double gb, int strict, double tol) {
-    /* Illinois variant of regula falsi; falls back to bisection when the bracket shrinks slowly. */
-    int side = 0, slow = 0, i;
-    if (crossed(ga, strict)) {
-        return a; /* not a bracket (rounding at a turning point): the nearer end is the best answer */
-    }
-    if (!crossed(gb, strict)) {
-        return b;
-    }
-    for (i = 0; i < 200 && b - a > tol; i++) {
-        const double width = b - a;
-        double t = (slow >= 2 || ga == gb) ? 0.5 * (a + b) : a + (b - a) * (ga / (ga - gb));
-        double gt;
-        if (!(t > a && t < b)) {
-            t = 0.5 * (a + b);
-        }
-        gt = g(ctx, t);
-        if (crossed(gt, strict)) {
-            b = t;
-            gb = gt;
-            if (side == 1) {
-                ga *= 0.5;
-            }
-            side = 1;
-        } else {
-            a = t;
-            ga = gt;
-            if (side == -1) {
-                gb *= 0.5;
-            }
-            side = -1;
-        }
-        slow = (b - a > 0.5 * width) ? slow + 1 : 0;
-    }
-    return b;
-}
-
 void encoder_start(Encoder *e, double position, double t) {
     e->count = (int64_t)floor(position);
     e->edge = e->count;
@@ -59,30 +21,17 @@ void encoder_start(Encoder *e, double position, double t) {
     e->t_prev = t;
 }
 
-typedef struct {
-    ScalarFn position;
-    const void *ctx;
-    double boundary;
-    int down;
-} Crossing;
-
-/* > 0 (or >= 0 moving up) once the position has crossed the boundary. */
-static double past_boundary(const void *ctx, double t) {
-    const Crossing *c = (const Crossing *)ctx;
-    double p = c->position(c->ctx, t);
-    return c->down ? c->boundary - p : p - c->boundary;
-}
-
-static double crossing_time(const Crossing *c, double a, double b, double tol) {
-    double ga = past_boundary(c, a), gb = past_boundary(c, b);
-    return root_after(past_boundary, c, a, ga, b, gb, c->down, tol);
+/* The instant in [a, b] at which the position passes the boundary c->level. */
+static double crossing_time(const Passing *c, double a, double b, double tol) {
+    return root_after(passing, c, a, passing(c, a), b, passing(c, b), c->dir < 0.0, tol);
 }
 
 void encoder_track(Encoder *e, ScalarFn position, const void *ctx, double a, double b, double pb, double t_origin,
                    double tol) {
-    Crossing c;
+    Passing c;
     double whole = floor(pb);
     int64_t count;
+    int down;
     if (!(fabs(whole) < 9.0e18)) {
         return; /* beyond the range of the counter: the plant's checks keep positions finite */
     }
@@ -90,22 +39,32 @@ void encoder_track(Encoder *e, ScalarFn position, const void *ctx, double a, dou
     if (count == e->count) {
         return;
     }
-    c.position = position;
+    down = count < e->count;
+    c.f = position;
     c.ctx = ctx;
-    c.down = count < e->count;
-    c.boundary = (double)(c.down ? count + 1 : count);
+    c.dir = down ? -1.0 : 1.0;
+    c.level = (double)(down ? count + 1 : count);
     e->t_prev = e->t_last;
     e->t_last = t_origin + crossing_time(&c, a, b, tol);
-    if (c.down ? e->count - count >= 2 : count - e->count >= 2) {
-        c.boundary = (double)(c.down ? count + 2 : count - 1);
+    if (down ? e->count - count >= 2 : count - e->count >= 2) {
+        c.level = (double)(down ? count + 2 : count - 1);
         e->t_prev = t_origin + crossing_time(&c, a, b, tol);
     }
-    e->edge = c.down ? count + 1 : count;
-    e->direction = c.down ? -1 : 1;
+    e->edge = down ? count + 1 : count;
+    e->direction = down ? -1 : 1;
     e->count = count;
 }
 
 int32_t wrap_int32(int64_t value) {
     uint32_t low = (uint32_t)((uint64_t)value & 0xffffffffu);
     return low > 0x7fffffffu ? (int32_t)((int64_t)low - 4294967296LL) : (int32_t)low;
+}
+
+void encoder_outputs(const Encoder *e, int32_t *count, int32_t *edge, int32_t *direction, double *t_last,
+                     double *t_prev) {
+    *count = wrap_int32(e->count);
+    *edge = wrap_int32(e->edge);
+    *direction = e->direction;
+    *t_last = e->t_last;
+    *t_prev = e->t_prev;
 }

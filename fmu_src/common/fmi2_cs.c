@@ -1,20 +1,20 @@
-/* FMI 2.0 co-simulation interface of a cosim plant, on top of cosim_fmu.h. */
-#include <stdlib.h>
+/* FMI 2.0 co-simulation interface of a cosim plant, on top of cosim_fmu.h. Every function that
+ * takes an instance begins with the entry check ENTER (the state table: fmi_calls.h). */
 #include <string.h>
 
 #include "fmi2Functions.h"
 #include "cosim_fmu.h"
 
 #define M ((ModelInstance *)c)
-#define ANY_PHASE (PH_MASK(PH_INSTANTIATED) | PH_MASK(PH_INITIALIZATION) | PH_MASK(PH_STEP) | PH_MASK(PH_EVENT) | \
-                   PH_MASK(PH_TERMINATED))
+/* The entry check: return fmi2Error unless the state table allows the call. */
+#define ENTER(fn)                                                                                             \
+    do {                                                                                                      \
+        if (!cf_enter(M, CALL_##fn)) {                                                                        \
+            return fmi2Error;                                                                                 \
+        }                                                                                                     \
+    } while (0)
 
-static fmi2Status result(ModelInstance *m, Status status) {
-    if (status >= ST_ERROR) {
-        m->phase = PH_ERROR;
-    }
-    return (fmi2Status)status;
-}
+static fmi2Status result(ModelInstance *m, Status status) { return (fmi2Status)cf_result(m, status); }
 
 /* The FMI 2.0 logger takes a printf format. Importers written in other languages often cannot read
  * variadic arguments, so the message itself is the format, with any '%' doubled. */
@@ -35,11 +35,12 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
     cb->logger(cb->componentEnvironment, m->instance_name, (fmi2Status)status, category, format);
 }
 
-static int unsupported(fmi2Component c, const char *fn) {
-    if (c != NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "%s is not supported by this FMU", fn);
+/* The entry check, then an error: for the functions these FMUs do not offer. */
+static fmi2Status unsupported(fmi2Component c, FmiCall call) {
+    if (!cf_enter(M, call)) {
+        return fmi2Error;
     }
-    return fmi2Error;
+    return result(M, cf_unsupported(M, call));
 }
 
 const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
@@ -50,9 +51,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[]) {
     (void)nCategories;
     (void)categories;
-    if (c == NULL) {
-        return fmi2Error;
-    }
+    ENTER(fmi2SetDebugLogging);
     M->logging_on = loggingOn ? 1 : 0;
     return fmi2OK;
 }
@@ -89,7 +88,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     return m;
 }
 
-void fmi2FreeInstance(fmi2Component c) { cf_free(M); }
+void fmi2FreeInstance(fmi2Component c) {
+    if (cf_enter(M, CALL_fmi2FreeInstance)) {
+        cf_free(M);
+    }
+}
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
@@ -97,18 +100,14 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    if (c == NULL || !cf_phase_allows(M, "fmi2SetupExperiment", PH_MASK(PH_INSTANTIATED))) {
-        return fmi2Error;
-    }
+    ENTER(fmi2SetupExperiment);
     M->start_time = startTime;
     M->time = startTime;
     return fmi2OK;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    if (c == NULL || !cf_phase_allows(M, "fmi2EnterInitializationMode", PH_MASK(PH_INSTANTIATED))) {
-        return fmi2Error;
-    }
+    ENTER(fmi2EnterInitializationMode);
     M->phase = PH_INITIALIZATION;
     M->outputs_stale = 1;
     return fmi2OK;
@@ -116,9 +115,7 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Status status;
-    if (c == NULL || !cf_phase_allows(M, "fmi2ExitInitializationMode", PH_MASK(PH_INITIALIZATION))) {
-        return fmi2Error;
-    }
+    ENTER(fmi2ExitInitializationMode);
     status = cf_exit_init(M);
     if (status <= ST_WARNING) {
         M->phase = PH_STEP;
@@ -127,141 +124,93 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
-    if (c == NULL || !cf_phase_allows(M, "fmi2Terminate", PH_MASK(PH_STEP))) {
-        return fmi2Error;
-    }
+    ENTER(fmi2Terminate);
     M->phase = PH_TERMINATED;
     return fmi2OK;
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
-    if (c == NULL) {
-        return fmi2Error;
-    }
+    ENTER(fmi2Reset);
     cf_defaults(M);
     return fmi2OK;
 }
 
+/* -- variables ---------------------------------------------------------------------------------- */
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_get(M, VT_FLOAT64, vr, nvr, value, "fmi2GetReal"));
+    ENTER(fmi2GetReal);
+    return result(M, cf_get(M, CALL_fmi2GetReal, VT_FLOAT64, vr, nvr, value));
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_get(M, VT_INT32, vr, nvr, value, "fmi2GetInteger"));
+    ENTER(fmi2GetInteger);
+    return result(M, cf_get(M, CALL_fmi2GetInteger, VT_INT32, vr, nvr, value));
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_get(M, VT_BOOL, vr, nvr, value, "fmi2GetBoolean"));
+    ENTER(fmi2GetBoolean);
+    return result(M, cf_get(M, CALL_fmi2GetBoolean, VT_BOOL, vr, nvr, value));
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
     (void)vr;
     (void)value;
-    if (c == NULL) {
-        return fmi2Error;
-    }
-    if (nvr == 0) {
-        return fmi2OK;
-    }
-    cf_log(M, ST_ERROR, "logStatusError", "fmi2GetString: the model has no String variables");
-    return fmi2Error;
+    ENTER(fmi2GetString);
+    return result(M, cf_no_vars(M, CALL_fmi2GetString, nvr));
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_set(M, VT_FLOAT64, vr, nvr, value, "fmi2SetReal"));
+    ENTER(fmi2SetReal);
+    return result(M, cf_set(M, CALL_fmi2SetReal, VT_FLOAT64, vr, nvr, value));
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_set(M, VT_INT32, vr, nvr, value, "fmi2SetInteger"));
+    ENTER(fmi2SetInteger);
+    return result(M, cf_set(M, CALL_fmi2SetInteger, VT_INT32, vr, nvr, value));
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
-    return c == NULL ? fmi2Error : result(M, cf_set(M, VT_BOOL, vr, nvr, value, "fmi2SetBoolean"));
+    ENTER(fmi2SetBoolean);
+    return result(M, cf_set(M, CALL_fmi2SetBoolean, VT_BOOL, vr, nvr, value));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     (void)vr;
     (void)value;
-    if (c == NULL) {
-        return fmi2Error;
-    }
-    if (nvr == 0) {
-        return fmi2OK;
-    }
-    cf_log(M, ST_ERROR, "logStatusError", "fmi2SetString: the model has no String variables");
-    return fmi2Error;
+    ENTER(fmi2SetString);
+    return result(M, cf_no_vars(M, CALL_fmi2SetString, nvr));
 }
 
 /* -- FMU state ---------------------------------------------------------------------------------- */
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    ModelSnapshot *snap;
-    if (c == NULL || state == NULL || !cf_phase_allows(M, "fmi2GetFMUstate", ANY_PHASE)) {
-        return fmi2Error;
-    }
-    snap = (ModelSnapshot *)(*state != NULL ? *state : malloc(sizeof(ModelSnapshot)));
-    if (snap == NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "fmi2GetFMUstate: out of memory");
-        return fmi2Error;
-    }
-    snap->phase = M->phase;
-    snap->time = M->time;
-    snap->v = M->v;
-    snap->s = M->s;
-    *state = snap;
-    return fmi2OK;
+    ENTER(fmi2GetFMUstate);
+    return result(M, cf_state_get(M, CALL_fmi2GetFMUstate, state));
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate state) {
-    const ModelSnapshot *snap = (const ModelSnapshot *)state;
-    if (c == NULL || snap == NULL || !cf_phase_allows(M, "fmi2SetFMUstate", ANY_PHASE)) {
-        return fmi2Error;
-    }
-    M->phase = snap->phase;
-    M->time = snap->time;
-    M->v = snap->v;
-    M->s = snap->s;
-    M->outputs_stale = 1;
-    return fmi2OK;
+    ENTER(fmi2SetFMUstate);
+    return result(M, cf_state_set(M, CALL_fmi2SetFMUstate, state));
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *state) {
-    if (c == NULL || state == NULL) {
-        return fmi2Error;
-    }
-    free(*state);
-    *state = NULL;
-    return fmi2OK;
+    ENTER(fmi2FreeFMUstate);
+    return result(M, cf_state_free(M, CALL_fmi2FreeFMUstate, state));
 }
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate state, size_t *size) {
     (void)state;
-    if (c == NULL || size == NULL) {
-        return fmi2Error;
-    }
-    *size = sizeof(ModelSnapshot);
-    return fmi2OK;
+    ENTER(fmi2SerializedFMUstateSize);
+    return result(M, cf_state_size(M, CALL_fmi2SerializedFMUstateSize, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate state, fmi2Byte bytes[], size_t size) {
-    if (c == NULL || state == NULL || size < sizeof(ModelSnapshot)) {
-        return unsupported(c, "fmi2SerializeFMUstate with a buffer smaller than fmi2SerializedFMUstateSize");
-    }
-    memcpy(bytes, state, sizeof(ModelSnapshot));
-    return fmi2OK;
+    ENTER(fmi2SerializeFMUstate);
+    return result(M, cf_state_serialize(M, CALL_fmi2SerializeFMUstate, state, (unsigned char *)bytes, size));
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size, fmi2FMUstate *state) {
-    if (c == NULL || state == NULL || size != sizeof(ModelSnapshot)) {
-        return unsupported(c, "fmi2DeSerializeFMUstate of data of another size");
-    }
-    if (*state == NULL) {
-        *state = malloc(sizeof(ModelSnapshot));
-    }
-    if (*state == NULL) {
-        return fmi2Error;
-    }
-    memcpy(*state, bytes, sizeof(ModelSnapshot));
-    return fmi2OK;
+    ENTER(fmi2DeSerializeFMUstate);
+    return result(M, cf_state_deserialize(M, CALL_fmi2DeSerializeFMUstate, (const unsigned char *)bytes, size,
+                                          state));
 }
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
@@ -273,7 +222,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
     (void)nKnown;
     (void)dvKnown;
     (void)dvUnknown;
-    return unsupported(c, "fmi2GetDirectionalDerivative");
+    return unsupported(c, CALL_fmi2GetDirectionalDerivative);
 }
 
 /* -- co-simulation ----------------------------------------------------------------------------- */
@@ -283,7 +232,7 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
     (void)nvr;
     (void)order;
     (void)value;
-    return unsupported(c, "fmi2SetRealInputDerivatives");
+    return unsupported(c, CALL_fmi2SetRealInputDerivatives);
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -292,7 +241,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     (void)nvr;
     (void)order;
     (void)value;
-    return unsupported(c, "fmi2GetRealOutputDerivatives");
+    return unsupported(c, CALL_fmi2GetRealOutputDerivatives);
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
@@ -300,52 +249,64 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
     double reached;
     int event;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (c == NULL) {
-        return fmi2Error;
-    }
+    ENTER(fmi2DoStep);
     /* FMI 2.0 has no early return: events inside the step are handled by the model itself. */
     M->early_return_allowed = 0;
-    return result(M, cf_do_step(M, currentCommunicationPoint, communicationStepSize, &reached, &event));
+    return result(M, cf_do_step(M, CALL_fmi2DoStep, currentCommunicationPoint, communicationStepSize, &reached,
+                                &event));
 }
 
-fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, "fmi2CancelStep"); }
+fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, CALL_fmi2CancelStep); }
+
+/* doStep never returns fmi2Pending or fmi2Discard: the status queries answer the two kinds an
+ * importer asks after a step (last successful time, terminated) and refuse the others. */
+/* The entry check and the arguments of a status query that answers one status kind. */
+static Status status_query(fmi2Component c, FmiCall call, fmi2StatusKind s, fmi2StatusKind answered,
+                           const void *value) {
+    if (!cf_enter(M, call)) {
+        return ST_ERROR;
+    }
+    if (value == NULL) {
+        return cf_null_argument(M, call, "value");
+    }
+    if (s != answered) {
+        cf_log(M, ST_ERROR, "logStatusError", "%s: status kind %d is not supported by this FMU", cf_call_name(call),
+               (int)s);
+        return ST_ERROR;
+    }
+    return ST_OK;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    Status status = status_query(c, CALL_fmi2GetRealStatus, s, fmi2LastSuccessfulTime, value);
+    if (status == ST_OK) {
+        *value = M->time;
+    }
+    return result(M, status);
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    Status status = status_query(c, CALL_fmi2GetBooleanStatus, s, fmi2Terminated, value);
+    if (status == ST_OK) {
+        *value = fmi2False; /* the model never asks to terminate */
+    }
+    return result(M, status);
+}
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     (void)s;
     (void)value;
-    return unsupported(c, "fmi2GetStatus (doStep never returns fmi2Pending)");
-}
-
-fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
-    if (c == NULL || value == NULL) {
-        return fmi2Error;
-    }
-    if (s == fmi2LastSuccessfulTime) {
-        *value = M->time;
-        return fmi2OK;
-    }
-    return unsupported(c, "fmi2GetRealStatus for this status kind");
+    return unsupported(c, CALL_fmi2GetStatus);
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
     (void)s;
     (void)value;
-    return unsupported(c, "fmi2GetIntegerStatus");
-}
-
-fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
-    if (c == NULL || value == NULL) {
-        return fmi2Error;
-    }
-    if (s == fmi2Terminated) {
-        *value = fmi2False;
-        return fmi2OK;
-    }
-    return unsupported(c, "fmi2GetBooleanStatus for this status kind");
+    return unsupported(c, CALL_fmi2GetIntegerStatus);
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
     (void)s;
     (void)value;
-    return unsupported(c, "fmi2GetStringStatus");
+    return unsupported(c, CALL_fmi2GetStringStatus);
 }

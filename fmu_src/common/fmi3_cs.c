@@ -3,22 +3,21 @@
  * Supported: Float64, Int32 and Boolean scalars, FMU state get/set/serialise, early return from
  * fmi3DoStep at model events (when the importer allows it) and event mode. Everything else of the
  * API is present and answers with a logged error. */
-#include <stdlib.h>
 #include <string.h>
 
 #include "fmi3Functions.h"
 #include "cosim_fmu.h"
 
 #define M ((ModelInstance *)instance)
-#define ANY_PHASE (PH_MASK(PH_INSTANTIATED) | PH_MASK(PH_INITIALIZATION) | PH_MASK(PH_STEP) | PH_MASK(PH_EVENT) | \
-                   PH_MASK(PH_TERMINATED))
+/* The entry check: return fmi3Error unless the state table allows the call. */
+#define ENTER(fn)                                                                                             \
+    do {                                                                                                      \
+        if (!cf_enter(M, CALL_##fn)) {                                                                        \
+            return fmi3Error;                                                                                 \
+        }                                                                                                     \
+    } while (0)
 
-static fmi3Status result(ModelInstance *m, Status status) {
-    if (status >= ST_ERROR) {
-        m->phase = PH_ERROR;
-    }
-    return (fmi3Status)status;
-}
+static fmi3Status result(ModelInstance *m, Status status) { return (fmi3Status)cf_result(m, status); }
 
 static void sink(ModelInstance *m, Status status, const char *category, const char *message) {
     fmi3LogMessageCallback log = (fmi3LogMessageCallback)m->log_fn;
@@ -27,29 +26,27 @@ static void sink(ModelInstance *m, Status status, const char *category, const ch
     }
 }
 
-static fmi3Status unsupported(fmi3Instance instance, const char *fn) {
-    if (instance != NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "%s is not supported by this FMU", fn);
-    }
-    return fmi3Error;
-}
-
-/* For variable types the models do not have: fine for zero variables, an error otherwise. */
-static fmi3Status no_vars(fmi3Instance instance, size_t nvr, const char *fn) {
-    if (instance == NULL) {
+/* The entry check, then an error: for the functions these FMUs do not offer. */
+static fmi3Status unsupported(fmi3Instance instance, FmiCall call) {
+    if (!cf_enter(M, call)) {
         return fmi3Error;
     }
-    if (nvr == 0) {
-        return fmi3OK;
-    }
-    cf_log(M, ST_ERROR, "logStatusError", "%s: the model has no variables of this type", fn);
-    return fmi3Error;
+    return result(M, cf_unsupported(M, call));
 }
 
-static int scalars(fmi3Instance instance, size_t nvr, size_t nValues, const char *fn) {
+/* The entry check, then fine for no value references: for variables no model has. */
+static fmi3Status no_vars(fmi3Instance instance, FmiCall call, size_t nvr) {
+    if (!cf_enter(M, call)) {
+        return fmi3Error;
+    }
+    return result(M, cf_no_vars(M, call, nvr));
+}
+
+/* 1 if there is one value per value reference (the models have scalars only); logs otherwise. */
+static int scalars(ModelInstance *m, FmiCall call, size_t nvr, size_t nValues) {
     if (nvr != nValues) {
-        cf_log(M, ST_ERROR, "logStatusError", "%s: %lu values for %lu value references (the model has scalars only)",
-               fn, (unsigned long)nValues, (unsigned long)nvr);
+        cf_log(m, ST_ERROR, "logStatusError", "%s: %lu values for %lu value references (the model has scalars only)",
+               cf_call_name(call), (unsigned long)nValues, (unsigned long)nvr);
         return 0;
     }
     return 1;
@@ -61,9 +58,7 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
                                const fmi3String categories[]) {
     (void)nCategories;
     (void)categories;
-    if (instance == NULL) {
-        return fmi3Error;
-    }
+    ENTER(fmi3SetDebugLogging);
     M->logging_on = loggingOn ? 1 : 0;
     return fmi3OK;
 }
@@ -144,7 +139,11 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
     return NULL;
 }
 
-void fmi3FreeInstance(fmi3Instance instance) { cf_free(M); }
+void fmi3FreeInstance(fmi3Instance instance) {
+    if (cf_enter(M, CALL_fmi3FreeInstance)) {
+        cf_free(M);
+    }
+}
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
@@ -152,9 +151,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
     (void)tolerance;
     (void)stopTimeDefined;
     (void)stopTime;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterInitializationMode", PH_MASK(PH_INSTANTIATED))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterInitializationMode);
     M->start_time = startTime;
     M->time = startTime;
     M->phase = PH_INITIALIZATION;
@@ -164,9 +161,7 @@ fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean tolera
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     Status status;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3ExitInitializationMode", PH_MASK(PH_INITIALIZATION))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3ExitInitializationMode);
     status = cf_exit_init(M);
     if (status <= ST_WARNING) {
         M->phase = M->event_mode_used ? PH_EVENT : PH_STEP;
@@ -175,25 +170,19 @@ fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterEventMode", PH_MASK(PH_STEP))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterEventMode);
     M->phase = PH_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3Terminate", PH_MASK(PH_STEP) | PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3Terminate);
     M->phase = PH_TERMINATED;
     return fmi3OK;
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
-    if (instance == NULL) {
-        return fmi3Error;
-    }
+    ENTER(fmi3Reset);
     cf_defaults(M);
     return fmi3OK;
 }
@@ -201,46 +190,51 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 /* -- variables ---------------------------------------------------------------------------------- */
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
                           size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetFloat64")) {
-        return fmi3Error;
+    ENTER(fmi3GetFloat64);
+    if (!scalars(M, CALL_fmi3GetFloat64, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_get(M, VT_FLOAT64, vr, nvr, values, "fmi3GetFloat64"));
+    return result(M, cf_get(M, CALL_fmi3GetFloat64, VT_FLOAT64, vr, nvr, values));
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Float64 values[], size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetFloat64")) {
-        return fmi3Error;
+    ENTER(fmi3SetFloat64);
+    if (!scalars(M, CALL_fmi3SetFloat64, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_set(M, VT_FLOAT64, vr, nvr, values, "fmi3SetFloat64"));
+    return result(M, cf_set(M, CALL_fmi3SetFloat64, VT_FLOAT64, vr, nvr, values));
 }
 
 fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
                         size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetInt32")) {
-        return fmi3Error;
+    ENTER(fmi3GetInt32);
+    if (!scalars(M, CALL_fmi3GetInt32, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_get(M, VT_INT32, vr, nvr, values, "fmi3GetInt32"));
+    return result(M, cf_get(M, CALL_fmi3GetInt32, VT_INT32, vr, nvr, values));
 }
 
 fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
                         size_t nValues) {
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetInt32")) {
-        return fmi3Error;
+    ENTER(fmi3SetInt32);
+    if (!scalars(M, CALL_fmi3SetInt32, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
-    return result(M, cf_set(M, VT_INT32, vr, nvr, values, "fmi3SetInt32"));
+    return result(M, cf_set(M, CALL_fmi3SetInt32, VT_INT32, vr, nvr, values));
 }
 
 /* fmi3Boolean is a C bool; the model stores Booleans as int: convert one at a time. */
 fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
                           size_t nValues) {
     size_t i;
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3GetBoolean")) {
-        return fmi3Error;
+    ENTER(fmi3GetBoolean);
+    if (!scalars(M, CALL_fmi3GetBoolean, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
     for (i = 0; i < nvr; i++) {
         int value = 0;
-        Status status = cf_get(M, VT_BOOL, &vr[i], 1, &value, "fmi3GetBoolean");
+        Status status = cf_get(M, CALL_fmi3GetBoolean, VT_BOOL, &vr[i], 1, &value);
         if (status > ST_WARNING) {
             return result(M, status);
         }
@@ -252,12 +246,13 @@ fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
 fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
                           const fmi3Boolean values[], size_t nValues) {
     size_t i;
-    if (instance == NULL || !scalars(instance, nvr, nValues, "fmi3SetBoolean")) {
-        return fmi3Error;
+    ENTER(fmi3SetBoolean);
+    if (!scalars(M, CALL_fmi3SetBoolean, nvr, nValues)) {
+        return result(M, ST_ERROR);
     }
     for (i = 0; i < nvr; i++) {
         int value = values[i] ? 1 : 0;
-        Status status = cf_set(M, VT_BOOL, &vr[i], 1, &value, "fmi3SetBoolean");
+        Status status = cf_set(M, CALL_fmi3SetBoolean, VT_BOOL, &vr[i], 1, &value);
         if (status > ST_WARNING) {
             return result(M, status);
         }
@@ -265,77 +260,67 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
     return fmi3OK;
 }
 
-#define NO_GETTER(NAME, T)                                                                                        \
-    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T values[],      \
-                             size_t nValues) {                                                                  \
-        (void)vr;                                                                                               \
-        (void)values;                                                                                           \
-        (void)nValues;                                                                                          \
-        return no_vars(instance, nvr, "fmi3Get" #NAME);                                                         \
+/* The functions for variables no model has (the other types, binaries, clocks and their intervals
+ * and shifts): fine for no value references, an error otherwise. NO_VARIABLES_n defines one with
+ * n arguments after the value references. */
+#define NO_VARIABLES_1(NAME, T1)                                                                                     \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a) {                  \
+        (void)vr;                                                                                                    \
+        (void)a;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
     }
-#define NO_SETTER(NAME, T)                                                                                        \
-    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const T values[], \
-                             size_t nValues) {                                                                  \
-        (void)vr;                                                                                               \
-        (void)values;                                                                                           \
-        (void)nValues;                                                                                          \
-        return no_vars(instance, nvr, "fmi3Set" #NAME);                                                         \
+#define NO_VARIABLES_2(NAME, T1, T2)                                                                                 \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a, T2 b) {            \
+        (void)vr;                                                                                                    \
+        (void)a;                                                                                                     \
+        (void)b;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
+    }
+#define NO_VARIABLES_3(NAME, T1, T2, T3)                                                                             \
+    fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a, T2 b, T3 c) {      \
+        (void)vr;                                                                                                    \
+        (void)a;                                                                                                     \
+        (void)b;                                                                                                     \
+        (void)c;                                                                                                     \
+        return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
     }
 
-NO_GETTER(Float32, fmi3Float32)
-NO_GETTER(Int8, fmi3Int8)
-NO_GETTER(UInt8, fmi3UInt8)
-NO_GETTER(Int16, fmi3Int16)
-NO_GETTER(UInt16, fmi3UInt16)
-NO_GETTER(UInt32, fmi3UInt32)
-NO_GETTER(Int64, fmi3Int64)
-NO_GETTER(UInt64, fmi3UInt64)
-NO_GETTER(String, fmi3String)
-NO_SETTER(Float32, fmi3Float32)
-NO_SETTER(Int8, fmi3Int8)
-NO_SETTER(UInt8, fmi3UInt8)
-NO_SETTER(Int16, fmi3Int16)
-NO_SETTER(UInt16, fmi3UInt16)
-NO_SETTER(UInt32, fmi3UInt32)
-NO_SETTER(Int64, fmi3Int64)
-NO_SETTER(UInt64, fmi3UInt64)
-NO_SETTER(String, fmi3String)
-
-fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
-                         fmi3Binary values[], size_t nValues) {
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return no_vars(instance, nvr, "fmi3GetBinary");
-}
-
-fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
-                         const fmi3Binary values[], size_t nValues) {
-    (void)vr;
-    (void)valueSizes;
-    (void)values;
-    (void)nValues;
-    return no_vars(instance, nvr, "fmi3SetBinary");
-}
-
-fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]) {
-    (void)vr;
-    (void)values;
-    return no_vars(instance, nvr, "fmi3GetClock");
-}
-
-fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
-    (void)vr;
-    (void)values;
-    return no_vars(instance, nvr, "fmi3SetClock");
-}
+NO_VARIABLES_2(GetFloat32, fmi3Float32 *, size_t)
+NO_VARIABLES_2(GetInt8, fmi3Int8 *, size_t)
+NO_VARIABLES_2(GetUInt8, fmi3UInt8 *, size_t)
+NO_VARIABLES_2(GetInt16, fmi3Int16 *, size_t)
+NO_VARIABLES_2(GetUInt16, fmi3UInt16 *, size_t)
+NO_VARIABLES_2(GetUInt32, fmi3UInt32 *, size_t)
+NO_VARIABLES_2(GetInt64, fmi3Int64 *, size_t)
+NO_VARIABLES_2(GetUInt64, fmi3UInt64 *, size_t)
+NO_VARIABLES_2(GetString, fmi3String *, size_t)
+NO_VARIABLES_3(GetBinary, size_t *, fmi3Binary *, size_t)
+NO_VARIABLES_2(SetFloat32, const fmi3Float32 *, size_t)
+NO_VARIABLES_2(SetInt8, const fmi3Int8 *, size_t)
+NO_VARIABLES_2(SetUInt8, const fmi3UInt8 *, size_t)
+NO_VARIABLES_2(SetInt16, const fmi3Int16 *, size_t)
+NO_VARIABLES_2(SetUInt16, const fmi3UInt16 *, size_t)
+NO_VARIABLES_2(SetUInt32, const fmi3UInt32 *, size_t)
+NO_VARIABLES_2(SetInt64, const fmi3Int64 *, size_t)
+NO_VARIABLES_2(SetUInt64, const fmi3UInt64 *, size_t)
+NO_VARIABLES_2(SetString, const fmi3String *, size_t)
+NO_VARIABLES_3(SetBinary, const size_t *, const fmi3Binary *, size_t)
+NO_VARIABLES_1(GetClock, fmi3Clock *)
+NO_VARIABLES_1(SetClock, const fmi3Clock *)
+NO_VARIABLES_2(GetIntervalDecimal, fmi3Float64 *, fmi3IntervalQualifier *)
+NO_VARIABLES_3(GetIntervalFraction, fmi3UInt64 *, fmi3UInt64 *, fmi3IntervalQualifier *)
+NO_VARIABLES_1(GetShiftDecimal, fmi3Float64 *)
+NO_VARIABLES_2(GetShiftFraction, fmi3UInt64 *, fmi3UInt64 *)
+NO_VARIABLES_1(SetIntervalDecimal, const fmi3Float64 *)
+NO_VARIABLES_2(SetIntervalFraction, const fmi3UInt64 *, const fmi3UInt64 *)
+NO_VARIABLES_1(SetShiftDecimal, const fmi3Float64 *)
+NO_VARIABLES_2(SetShiftFraction, const fmi3UInt64 *, const fmi3UInt64 *)
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
                                                size_t *nDependencies) {
     (void)valueReference;
     (void)nDependencies;
-    return unsupported(instance, "fmi3GetNumberOfVariableDependencies");
+    return unsupported(instance, CALL_fmi3GetNumberOfVariableDependencies);
 }
 
 fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
@@ -348,81 +333,41 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
     (void)elementIndicesOfIndependents;
     (void)dependencyKinds;
     (void)nDependencies;
-    return unsupported(instance, "fmi3GetVariableDependencies");
+    return unsupported(instance, CALL_fmi3GetVariableDependencies);
 }
 
 /* -- FMU state ---------------------------------------------------------------------------------- */
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    ModelSnapshot *snap;
-    if (instance == NULL || FMUState == NULL || !cf_phase_allows(M, "fmi3GetFMUState", ANY_PHASE)) {
-        return fmi3Error;
-    }
-    snap = (ModelSnapshot *)(*FMUState != NULL ? *FMUState : malloc(sizeof(ModelSnapshot)));
-    if (snap == NULL) {
-        cf_log(M, ST_ERROR, "logStatusError", "fmi3GetFMUState: out of memory");
-        return fmi3Error;
-    }
-    snap->phase = M->phase;
-    snap->time = M->time;
-    snap->v = M->v;
-    snap->s = M->s;
-    *FMUState = snap;
-    return fmi3OK;
+    ENTER(fmi3GetFMUState);
+    return result(M, cf_state_get(M, CALL_fmi3GetFMUState, FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    const ModelSnapshot *snap = (const ModelSnapshot *)FMUState;
-    if (instance == NULL || snap == NULL || !cf_phase_allows(M, "fmi3SetFMUState", ANY_PHASE)) {
-        return fmi3Error;
-    }
-    M->phase = snap->phase;
-    M->time = snap->time;
-    M->v = snap->v;
-    M->s = snap->s;
-    M->outputs_stale = 1;
-    return fmi3OK;
+    ENTER(fmi3SetFMUState);
+    return result(M, cf_state_set(M, CALL_fmi3SetFMUState, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    if (instance == NULL || FMUState == NULL) {
-        return fmi3Error;
-    }
-    free(*FMUState);
-    *FMUState = NULL;
-    return fmi3OK;
+    ENTER(fmi3FreeFMUState);
+    return result(M, cf_state_free(M, CALL_fmi3FreeFMUState, FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
     (void)FMUState;
-    if (instance == NULL || size == NULL) {
-        return fmi3Error;
-    }
-    *size = sizeof(ModelSnapshot);
-    return fmi3OK;
+    ENTER(fmi3SerializedFMUStateSize);
+    return result(M, cf_state_size(M, CALL_fmi3SerializedFMUStateSize, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
                                  size_t size) {
-    if (instance == NULL || FMUState == NULL || size < sizeof(ModelSnapshot)) {
-        return unsupported(instance, "fmi3SerializeFMUState with a buffer smaller than fmi3SerializedFMUStateSize");
-    }
-    memcpy(serializedState, FMUState, sizeof(ModelSnapshot));
-    return fmi3OK;
+    ENTER(fmi3SerializeFMUState);
+    return result(M, cf_state_serialize(M, CALL_fmi3SerializeFMUState, FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
-    if (instance == NULL || FMUState == NULL || size != sizeof(ModelSnapshot)) {
-        return unsupported(instance, "fmi3DeserializeFMUState of data of another size");
-    }
-    if (*FMUState == NULL) {
-        *FMUState = malloc(sizeof(ModelSnapshot));
-    }
-    if (*FMUState == NULL) {
-        return fmi3Error;
-    }
-    memcpy(*FMUState, serializedState, sizeof(ModelSnapshot));
-    return fmi3OK;
+    ENTER(fmi3DeserializeFMUState);
+    return result(M, cf_state_deserialize(M, CALL_fmi3DeserializeFMUState, serializedState, size, FMUState));
 }
 
 /* -- derivatives, clocks, model exchange: not offered ----------------------------------------- */
@@ -437,7 +382,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return unsupported(instance, "fmi3GetDirectionalDerivative");
+    return unsupported(instance, CALL_fmi3GetDirectionalDerivative);
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[], size_t nUnknowns,
@@ -451,82 +396,19 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     (void)nSeed;
     (void)sensitivity;
     (void)nSensitivity;
-    return unsupported(instance, "fmi3GetAdjointDerivative");
+    return unsupported(instance, CALL_fmi3GetAdjointDerivative);
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EnterConfigurationMode");
+    return unsupported(instance, CALL_fmi3EnterConfigurationMode);
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3ExitConfigurationMode");
-}
-
-fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                  fmi3Float64 intervals[], fmi3IntervalQualifier qualifiers[]) {
-    (void)vr;
-    (void)intervals;
-    (void)qualifiers;
-    return no_vars(instance, nvr, "fmi3GetIntervalDecimal");
-}
-
-fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                   fmi3UInt64 counters[], fmi3UInt64 resolutions[],
-                                   fmi3IntervalQualifier qualifiers[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    (void)qualifiers;
-    return no_vars(instance, nvr, "fmi3GetIntervalFraction");
-}
-
-fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                               fmi3Float64 shifts[]) {
-    (void)vr;
-    (void)shifts;
-    return no_vars(instance, nvr, "fmi3GetShiftDecimal");
-}
-
-fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                fmi3UInt64 counters[], fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, nvr, "fmi3GetShiftFraction");
-}
-
-fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                  const fmi3Float64 intervals[]) {
-    (void)vr;
-    (void)intervals;
-    return no_vars(instance, nvr, "fmi3SetIntervalDecimal");
-}
-
-fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                   const fmi3UInt64 counters[], const fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, nvr, "fmi3SetIntervalFraction");
-}
-
-fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                               const fmi3Float64 shifts[]) {
-    (void)vr;
-    (void)shifts;
-    return no_vars(instance, nvr, "fmi3SetShiftDecimal");
-}
-
-fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                                const fmi3UInt64 counters[], const fmi3UInt64 resolutions[]) {
-    (void)vr;
-    (void)counters;
-    (void)resolutions;
-    return no_vars(instance, nvr, "fmi3SetShiftFraction");
+    return unsupported(instance, CALL_fmi3ExitConfigurationMode);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EvaluateDiscreteStates");
+    return unsupported(instance, CALL_fmi3EvaluateDiscreteStates);
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
@@ -535,9 +417,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Float64 *nextEventTime) {
     int again = 0;
     Status status;
-    if (instance == NULL || !cf_phase_allows(M, "fmi3UpdateDiscreteStates", PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3UpdateDiscreteStates);
     status = model_event_update(M, &again);
     model_outputs(M);
     M->outputs_stale = 0;
@@ -563,7 +443,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 }
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    return unsupported(instance, "fmi3EnterContinuousTimeMode");
+    return unsupported(instance, CALL_fmi3EnterContinuousTimeMode);
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
@@ -571,68 +451,66 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
     (void)noSetFMUStatePriorToCurrentPoint;
     (void)enterEventMode;
     (void)terminateSimulation;
-    return unsupported(instance, "fmi3CompletedIntegratorStep");
+    return unsupported(instance, CALL_fmi3CompletedIntegratorStep);
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
     (void)time;
-    return unsupported(instance, "fmi3SetTime");
+    return unsupported(instance, CALL_fmi3SetTime);
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
     (void)continuousStates;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3SetContinuousStates");
+    return unsupported(instance, CALL_fmi3SetContinuousStates);
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
     (void)derivatives;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStateDerivatives");
+    return unsupported(instance, CALL_fmi3GetContinuousStateDerivatives);
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[], size_t nEventIndicators) {
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    return result(M, cf_event_indicators(M, eventIndicators, nEventIndicators));
+    ENTER(fmi3GetEventIndicators);
+    return result(M, cf_event_indicators(M, CALL_fmi3GetEventIndicators, eventIndicators, nEventIndicators));
 }
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[], size_t nContinuousStates) {
     (void)continuousStates;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetContinuousStates");
+    return unsupported(instance, CALL_fmi3GetContinuousStates);
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
     (void)nominals;
     (void)nContinuousStates;
-    return unsupported(instance, "fmi3GetNominalsOfContinuousStates");
+    return unsupported(instance, CALL_fmi3GetNominalsOfContinuousStates);
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
-    if (instance == NULL || nEventIndicators == NULL) {
-        return fmi3Error;
+    ENTER(fmi3GetNumberOfEventIndicators);
+    if (nEventIndicators == NULL) {
+        return result(M, cf_null_argument(M, CALL_fmi3GetNumberOfEventIndicators, "nEventIndicators"));
     }
     *nEventIndicators = N_EVENT_INDICATORS;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
-    if (instance == NULL || nContinuousStates == NULL) {
-        return fmi3Error;
+    ENTER(fmi3GetNumberOfContinuousStates);
+    if (nContinuousStates == NULL) {
+        return result(M, cf_null_argument(M, CALL_fmi3GetNumberOfContinuousStates, "nContinuousStates"));
     }
     *nContinuousStates = 0; /* co-simulation only: the states are internal to the model */
     return fmi3OK;
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    if (instance == NULL || !cf_phase_allows(M, "fmi3EnterStepMode", PH_MASK(PH_EVENT))) {
-        return fmi3Error;
-    }
+    ENTER(fmi3EnterStepMode);
     M->phase = PH_STEP;
     return fmi3OK;
 }
@@ -644,7 +522,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
     (void)orders;
     (void)values;
     (void)nValues;
-    return unsupported(instance, "fmi3GetOutputDerivatives");
+    return unsupported(instance, CALL_fmi3GetOutputDerivatives);
 }
 
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
@@ -655,10 +533,8 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     int event = 0;
     Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
-    if (instance == NULL) {
-        return fmi3Error;
-    }
-    status = cf_do_step(M, currentCommunicationPoint, communicationStepSize, &reached, &event);
+    ENTER(fmi3DoStep);
+    status = cf_do_step(M, CALL_fmi3DoStep, currentCommunicationPoint, communicationStepSize, &reached, &event);
     if (eventHandlingNeeded != NULL) {
         *eventHandlingNeeded = (event && M->event_mode_used) ? true : false;
     }
@@ -678,5 +554,5 @@ fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference 
                                       fmi3Float64 activationTime) {
     (void)clockReference;
     (void)activationTime;
-    return unsupported(instance, "fmi3ActivateModelPartition");
+    return unsupported(instance, CALL_fmi3ActivateModelPartition);
 }
