@@ -12,12 +12,10 @@ from __future__ import annotations
 
 import pytest
 
-from cosim.controllers.pokeys import PulseEngine
+from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine
 from cosim.controllers.pokeys.axis_double import PositionSwitch
-from cosim.controllers.pokeys.limits import SLOT_NS
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
-from cosim.pokeys_device.client import DirectClient
 from cosim.pokeys_device.layouts import (
     CFG_ENABLED,
     CFG_INTERNAL_PLANNER,
@@ -28,10 +26,11 @@ from cosim.pokeys_device.layouts import (
     ParamsV1,
 )
 from cosim.pokeys_device.packets import build_request
+from cosim.testing.pokeys_client import DirectClient
 
 
 def make(sim: Simulation, model: str) -> tuple[PulseEngine, Device, DirectClient]:
-    engine = PulseEngine(sim)
+    engine = PulseEngine(sim, EngineConfig.for_model(model))
     device = Device(DeviceIdentity.preset(model), PulseEngineAdapter(engine))
     return engine, device, DirectClient(device)
 
