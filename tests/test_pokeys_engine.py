@@ -159,3 +159,38 @@ def test_only_host_states_can_be_set(sim: Simulation, state: int) -> None:
     engine = PulseEngine(sim)
     with pytest.raises(ConfigurationError, match=rf"engine state = {state} is not allowed \(allowed: 0 stopped"):
         engine.set_state(state)
+
+
+def test_reconfigure_applies_switch_enables_direction_inversion_and_limits_from_now_on(sim: Simulation) -> None:
+    engine = PulseEngine(sim)
+    engine.switches.limit_pos[1].set(1)  # tripped, but not enabled
+    engine.fill_buffer([encode_entry((2, 0, 0))] * 10)
+    engine.set_state(EngineState.BUFFER)
+    y_on = (AxisConfig(invert_direction=True), AxisConfig(limit_pos_enabled=True), AxisConfig())
+    sim.call_at(3 * MS + 100_000, 30, lambda: engine.reconfigure(EngineConfig(axes=y_on)))
+    sim.run(until=10 * MS)
+    assert sim.trace.edges("pokeys.state")[1].tolist() == [0, 2, 100]  # the enabled limit is seen at 4 ms
+    assert sim.trace.edges("pokeys.state")[0].tolist()[-1] == 4 * MS
+    assert sim.trace.edges("pokeys.x.dir")[0].tolist() == [0, 3 * MS + 100_000]  # inverted at once: idle level 1
+    assert engine.status().positions == (8, 0, 0) and engine.config.axes[1].limit_pos_enabled
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"model": "57E"}, r"reconfigure model = '57E' is not allowed \(allowed: '56E' \(fixed when the engine"),
+    ({"pulse_width_ns": 2_000}, r"reconfigure pulse_width_ns = 2000 is not allowed \(allowed: 5000 \(fixed"),
+])
+def test_reconfigure_keeps_the_model_and_the_pulse_width(sim: Simulation, fields: dict[str, object],
+                                                         message: str) -> None:
+    engine = PulseEngine(sim)
+    with pytest.raises(ConfigurationError, match=message):
+        engine.reconfigure(EngineConfig(**fields))  # type: ignore[arg-type]
+
+
+def test_reconfigured_emergency_polarity_keeps_a_healthy_input_healthy(sim: Simulation) -> None:
+    engine = PulseEngine(sim)
+    engine.set_state(EngineState.BUFFER)
+    engine.reconfigure(EngineConfig(emergency_polarity=1))
+    assert engine.switches.emergency.value == 1  # healthy for polarity 1 (low = emergency)
+    sim.call_at(2 * MS + 1, 30, lambda: engine.switches.emergency.set(0))
+    sim.run(until=5 * MS)
+    assert engine.state == EngineState.STOP_EMERGENCY and sim.trace.edges("pokeys.state")[0].tolist()[-1] == 3 * MS
