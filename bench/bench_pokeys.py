@@ -3,12 +3,12 @@
 The same job runs in one process: through :class:`PulseEngine` (one pulse-train segment per slot
 and axis) alone, through it with three Stepper FMUs (NEMA 17 preset with its L/R current loop,
 FMI 3.0, ``max_step`` 100 us so that the FMU's own bounds set its steps) coupled by
-:func:`~cosim.couplings.stepper.couple_stepper`, and through :class:`NaivePulseEngine` (one
-SimPy event per pulse). All are fed by the host model over the USB link. Then every pulse of the
-segment run is checked (at most 25 per slot, spacing, direction set-up) and the steppers'
-``commanded_steps`` are compared with the engine counters. Printed: wall time per part (engine,
-FMUs = the difference between the runs with and without them, checks) and the real-time factors
-(simulated time / wall time). Run::
+the cosim.couplings.stepper coupling, and through the naive model of
+:mod:`cosim.testing.pokeys_naive` (one SimPy event per pulse). All are fed by the host model over
+the USB link. Then every pulse of the segment run is checked (at most 25 per slot, spacing,
+direction set-up) and the steppers' ``commanded_steps`` are compared with the engine counters.
+Printed: wall time per part (engine, FMUs = the difference between the runs with and without
+them, checks) and the real-time factors (simulated time / wall time). Run::
 
     .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive] [--no-steppers] [--ideal-driver]
                                            [--max-step 1e-4]
@@ -19,17 +19,18 @@ from __future__ import annotations
 import argparse
 import time
 from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 from cosim.checks import DirectionSetup, MinPulseSpacing, PulsesPerWindow
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
 from cosim.controllers.pokeys.host import HostApp
-from cosim.controllers.pokeys.naive import NaivePulseEngine
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.couplings.stepper import couple_stepper
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.presets import load_preset
 from cosim.signals import Signal
+from cosim.testing.pokeys_naive import naive_pulse_engine
 
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
 
@@ -72,13 +73,13 @@ class StandIn:
         raise NotImplementedError
 
 
-def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig, *,
+def simulate(kind: Callable[..., Any], entries: list[bytes], config: EngineConfig, *,
              steppers: bool = False, stand_ins: bool = False, ideal_driver: bool = False,
              max_step_s: float = MAX_STEP_S) -> tuple[Simulation, float, int]:
     """Run the job; with ``steppers`` three Stepper FMUs (loaded before the clock starts) follow the
     axes, with ``stand_ins`` three plants that do nothing."""
     sim = Simulation(seed=1)
-    engine = kind(sim, config)
+    engine: PulseEngine = kind(sim, config)
     HostApp(sim, engine, entries, link="usb", prefill_slots=100, period_ns=10_000_000)
     plants = []
     if stand_ins:
@@ -90,11 +91,11 @@ def simulate(kind: type[PulseEngine], entries: list[bytes], config: EngineConfig
         plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", parameters=preset) for a in AXES]
         for i, plant in enumerate(plants):
             couple_stepper(engine.step_dir(i), plant)
-    until = (len(entries) + 200) * SLOT_NS
+    until = (len(entries) + 200) * engine.slot_ticks
     started = time.perf_counter()
     sim.run(until=until)
     wall = time.perf_counter() - started
-    assert engine.all_underruns == [], engine.all_underruns
+    assert engine.underruns == [], engine.underruns
     for i, plant in enumerate(plants):
         commanded = int(plant.read("commanded_steps"))
         assert commanded == engine.positions[i].value == engine.steps[i].position, (commanded, i)
@@ -118,16 +119,17 @@ def main() -> None:
     entries = job(args.seconds, config)
     plan_s = time.perf_counter() - started
     sim, engine_s, until = simulate(PulseEngine, entries, config)
-    simulated_s = until / 1e9
+    simulated_s = sim.timebase.seconds(until)
     pulses = sum(int(sim.trace.segments(f"pokeys.{a}.step")["count"].sum()) for a in AXES)
 
     started = time.perf_counter()
     results = []
     for a in AXES:
         step = f"pokeys.{a}.step"
-        results += [PulsesPerWindow(step, 25, SLOT_NS).evaluate(sim.trace),
-                    MinPulseSpacing(step, SLOT_NS // 25).evaluate(sim.trace),
-                    DirectionSetup(step, f"pokeys.{a}.dir", config.dir_setup_ns, positive_level=0).evaluate(sim.trace)]
+        results += [PulsesPerWindow(step, 25, sim.ticks("1 ms")).evaluate(sim.trace),
+                    MinPulseSpacing(step, sim.ticks("40 us")).evaluate(sim.trace),
+                    DirectionSetup(step, f"pokeys.{a}.dir", sim.ticks(config.dir_setup_ns, "ns"),
+                                   positive_level=0).evaluate(sim.trace)]
     checks_s = time.perf_counter() - started
     assert all(r.passed for r in results), [r.summary() for r in results if not r.passed]
 
@@ -150,7 +152,7 @@ def main() -> None:
         full = coupled_s + checks_s
         print(f"  engine + FMUs + checks (the issue's job) {full:8.3f} s   RTF {simulated_s / full:7.1f}x")
     if not args.no_naive:
-        naive_sim, naive_s, _ = simulate(NaivePulseEngine, entries, config)
+        naive_sim, naive_s, _ = simulate(naive_pulse_engine, entries, config)
         naive_pulses = sum(naive_sim.trace.pulses(f"pokeys.{a}.step")[0].size for a in AXES)
         assert naive_pulses == pulses
         print(f"  naive model, one event per pulse         {naive_s:8.3f} s   RTF {simulated_s / naive_s:7.1f}x")

@@ -26,8 +26,8 @@ from pathlib import Path
 
 from cosim.controllers.pokeys import SLOT_NS, uniform_axes
 from cosim.controllers.pokeys.planner import Move, plan
-from cosim.pokeys_device.client import PoKeysClient, discover
 from cosim.pokeys_device.layouts import CFG_ENABLED, AxisRecord
+from cosim.testing.pokeys_client import PoKeysClient, discover
 
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
 

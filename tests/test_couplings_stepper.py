@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 import pytest
 
-from cosim.controllers.pokeys import AXES, SLOT_NS, AxisConfig, EngineConfig, EngineState, PulseEngine, encode_entry
+from cosim.controllers.pokeys import AXES, AxisConfig, EngineConfig, EngineState, PulseEngine, encode_entry
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.couplings.stepper import couple_stepper
@@ -48,7 +48,7 @@ def test_three_axis_job_near_25_khz_counters_equal_pulses_and_commanded_steps(si
     HostApp(sim, engine, to_entries(counts), link="usb", prefill_slots=64)
     sim.run(until=300 * MS)
 
-    assert engine.state == EngineState.BUFFER and engine.all_underruns == []
+    assert engine.state == EngineState.BUFFER and engine.underruns == []
     for i, a in enumerate(AXES):
         segments = sim.trace.segments(f"pokeys.{a}.step")
         assert int(segments["count"].max()) == {"x": 24, "y": 18, "z": 12}[a] <= 25  # no slot above 25 pulses
@@ -64,7 +64,7 @@ def test_three_axis_job_near_25_khz_counters_equal_pulses_and_commanded_steps(si
         assert plants[i].steps < len(counts)
     # the recorded commanded_steps end at the counter (what the scenario check compares)
     t, v = sim.trace.edges("stepper_x.commanded_steps")
-    assert int(v[-1]) == 3_000 and int(t[-1]) == sim.trace.segments("pokeys.x.step")["t0"][-1] + SLOT_NS
+    assert int(v[-1]) == 3_000 and int(t[-1]) == sim.trace.segments("pokeys.x.step")["t0"][-1] + engine.slot_ticks
 
 
 def test_constant_count_sets_the_rate_once_and_zero_after_the_last_slot(sim: Simulation) -> None:
@@ -148,12 +148,12 @@ def test_limit_trip_from_the_fmu_stops_pulses_at_the_next_slot_boundary(sim: Sim
 
     t_sw, v_sw = sim.trace.edges("pokeys.x.limit_pos")
     t_trip = int(t_sw[v_sw == 1][0])
-    boundary = engine.t0_ns + -(-(t_trip - engine.t0_ns) // SLOT_NS) * SLOT_NS  # first slot start >= trip
+    boundary = engine.t0 + -(-(t_trip - engine.t0) // engine.slot_ticks) * engine.slot_ticks  # first slot start >= trip
     segments = sim.trace.segments("pokeys.x.step")
     last = int(np.flatnonzero(segments["t0"] < boundary)[-1])
     t0, n = int(segments["t0"][last]), int(segments["count"][last])
     pulses = sim.trace.pulses("pokeys.x.step")[0]
-    assert int(pulses[-1]) == t0 + ((n - 1) * SLOT_NS) // n < boundary  # the exact last pulse
+    assert int(pulses[-1]) == t0 + ((n - 1) * engine.slot_ticks) // n < boundary  # the exact last pulse
     t_state, v_state = sim.trace.edges("pokeys.state")
     assert int(t_state[v_state == 100][0]) == boundary
     assert engine.state == EngineState.STOP_LIMIT

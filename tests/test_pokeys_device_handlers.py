@@ -12,12 +12,10 @@ from __future__ import annotations
 
 import pytest
 
-from cosim.controllers.pokeys import PulseEngine
-from cosim.controllers.pokeys.limits import SLOT_NS
+from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine, Status
 from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
-from cosim.pokeys_device.client import DirectClient
 from cosim.pokeys_device.layouts import (
     CFG_ENABLED,
     CFG_INTERNAL_PLANNER,
@@ -28,10 +26,11 @@ from cosim.pokeys_device.layouts import (
     ParamsV1,
 )
 from cosim.pokeys_device.packets import build_request
+from cosim.testing.pokeys_client import DirectClient
 
 
 def make(sim: Simulation, model: str) -> tuple[PulseEngine, Device, DirectClient]:
-    engine = PulseEngine(sim)
+    engine = PulseEngine(sim, EngineConfig.for_model(model))
     device = Device(DeviceIdentity.preset(model), PulseEngineAdapter(engine))
     return engine, device, DirectClient(device)
 
@@ -199,3 +198,15 @@ def test_v2_status_check_byte_follows_the_request(sim: Simulation) -> None:
     for check in (0, 0x15, 198, 0xFF):
         reply = client.device.handle(build_request(0x85, 0x00, check, request_id=9))
         assert reply is not None and reply[63] == (check + 0x5A) & 0xFF and reply[3] == 0
+
+
+def test_device_underruns_are_the_engines_records(sim: Simulation) -> None:
+    engine, device, client = make(sim, "56E")
+    client.pe_enable(True)
+    client.pe_set_state(2)
+    client.pe_fill([(1, 0, 0)] * 3)  # slots 0..2; 3..6 find the buffer empty
+    run_to(sim, 6 * SLOT_NS + 500_000)
+    client.pe_fill([(1, 0, 0)] * 2)  # data again at 7 ms; empty from 9 ms on: the end of the job
+    run_to(sim, 20 * SLOT_NS)
+    assert [(u.t_start, u.t_end, u.slots) for u in engine.underruns] == [(3 * SLOT_NS, 7 * SLOT_NS, 4)]
+    assert isinstance(device.adapter.status(), Status) and device.adapter.settings() is engine.config

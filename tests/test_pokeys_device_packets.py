@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import pytest
+from pokeys_fake_engine import FakeEngine
 
 from cosim.errors import ConfigurationError
-from cosim.pokeys_device import Device, DeviceIdentity, FakeEngine
+from cosim.pokeys_device import Device, DeviceIdentity
 from cosim.pokeys_device.identity import decode_device_data, decode_discovery, discovery_reply, identity_reply
 from cosim.pokeys_device.layouts import (
     AxisRecord,

@@ -23,11 +23,11 @@ from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.pokeys_device import DeviceIdentity
-from cosim.pokeys_device.client import PoKeysClient, discover
 from cosim.pokeys_device.layouts import CFG_ENABLED, SW_LIMIT_POS, AxisRecord
 from cosim.pokeys_device.packets import build_request
 from cosim.pokeys_device.rig import VirtualPoKeys, Wiring
 from cosim.pokeys_device.server import BackgroundServer, DeviceServer
+from cosim.testing.pokeys_client import PoKeysClient, discover
 
 AXIS = AxisRecord(config=CFG_ENABLED, max_speed=25.0, accel=0.1, decel=0.1)
 POLL_S = 0.003

@@ -1,22 +1,26 @@
 """The byte-level test vectors of the PoKeys protocol notes (section 7), reproduced exactly.
 
 Each vector runs in-process against :class:`Device` (no sockets), over the real engine model
-(``PulseEngine`` in a :class:`Simulation`, advanced slot by slot) and, where the vector needs more
-than the engine model does (16-bit entries of 1000 pulses), over the in-memory fake::
+(``PulseEngine`` in a :class:`Simulation`, advanced slot by slot) and over the in-memory fake::
 
     t = 0 ms        V5 enable, state 2; V6 fill 18 slots       (reply before any slot ran)
     t = 0..18 ms    18 slot starts pop the 18 slots
     t = 18 ms + 1   V7 status: positions 18 x (10, -5, 127)
+
+The notes' vectors V6/V7 and V12 put 127 pulses per slot on z and assume they are applied as
+given (the notes' convention). The fake does that; the engine model is a PoKeys56E / 57E, whose
+generator emits at most 25 pulses per slot, and refuses those fills as its Python API does: the
+same request bytes then get ``accepted = 0``.
 """
 
 from __future__ import annotations
 
 import pytest
+from pokeys_fake_engine import FakeEngine
 
-from cosim.controllers.pokeys import PulseEngine
-from cosim.controllers.pokeys.limits import SLOT_NS
+from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine
 from cosim.kernel import Simulation
-from cosim.pokeys_device import Device, DeviceIdentity, FakeEngine, PulseEngineAdapter
+from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
 from cosim.pokeys_device.packets import build_large_fill, checksum, encode_entries, from_hexdump
 
 V1_REQUEST = "00: BB 00 00 00 00 00 01 BC"
@@ -111,7 +115,8 @@ class Rig:
         identity = DeviceIdentity.preset(model)
         if engine == "model":
             self.sim = Simulation(seed=1)
-            self.adapter: PulseEngineAdapter | FakeEngine = PulseEngineAdapter(PulseEngine(self.sim))
+            self.model = PulseEngine(self.sim, EngineConfig.for_model(model))
+            self.adapter: PulseEngineAdapter | FakeEngine = PulseEngineAdapter(self.model)
         else:
             self.fake = FakeEngine()
             self.adapter = self.fake
@@ -156,15 +161,36 @@ def test_v3_discovery_replies() -> None:
 
 
 @pytest.mark.parametrize("engine", ENGINES)
-def test_v4_to_v7_pulse_engine_v1_info_enable_fill_status(engine: str) -> None:
+def test_v4_to_v5_pulse_engine_v1_info_and_enable(engine: str) -> None:
     rig = Rig("56E", engine)
     assert rig.ask(V4[0]) == frame(V4[1])
     assert rig.ask(V5_ENABLE[0]) == frame(V5_ENABLE[1])
     assert rig.ask(V5_STATE[0]) == frame(V5_STATE[1])
+
+
+def test_v6_v7_fill_and_status_as_the_notes_give_them_on_an_engine_without_a_per_slot_limit() -> None:
+    rig = Rig("56E", "fake")
+    for request in (V4[0], V5_ENABLE[0], V5_STATE[0]):
+        rig.ask(request)
     assert rig.ask(V6_REQUEST) == frame(V6_REPLY)  # before the first new slot has run
     rig.run_slots(18)
     assert rig.ask(V7_STATUS[0]) == frame(V7_STATUS[1])
     assert rig.ask(V7_FREE[0]) == frame(V7_FREE[1])
+
+
+def test_v6_on_the_56e_model_is_refused_for_127_pulses_on_z() -> None:
+    rig = Rig("56E", "model")
+    for request in (V4[0], V5_ENABLE[0], V5_STATE[0]):
+        rig.ask(request)
+    expected = bytearray(frame(V6_REPLY))
+    expected[8] = 0  # accepted: none
+    expected[25:28] = bytes((1, 1, 1))  # axis states: ready, as nothing is queued
+    assert rig.ask(V6_REQUEST) == bytes(expected)
+    rig.run_slots(18)
+    status = rig.adapter.status()
+    assert status.positions == (0, 0, 0) and status.queued_slots == 0 and status.refused_fills == 1
+    assert rig.device.log.counts["rejected"] == 1
+    assert rig.ask(V7_FREE[0])[8] == 128
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -200,12 +226,24 @@ def configure_v2(rig: Rig) -> None:
 
 
 @pytest.mark.parametrize("engine", ENGINES)
-def test_v10_to_v12_v2_setup_axes_running_and_8bit_fill(engine: str) -> None:
-    rig = Rig("57E", engine)
+def test_v10_v11_v2_setup_axes_running(engine: str) -> None:
+    configure_v2(Rig("57E", engine))
+
+
+def test_v12_v2_8bit_fill_as_the_notes_give_it_on_an_engine_without_a_per_slot_limit() -> None:
+    rig = Rig("57E", "fake")
     configure_v2(rig)
     assert rig.ask(V12_FILL[0]) == frame(V12_FILL[1])
     rig.run_slots(18)
     assert rig.ask(V12_STATUS[0]) == frame(V12_STATUS[1])
+
+
+def test_v12_on_the_57e_model_is_refused_for_127_pulses_on_z() -> None:
+    rig = Rig("57E", "model")
+    configure_v2(rig)
+    reply = rig.ask(V12_FILL[0])
+    assert reply[2] == 0 and reply[16:19] == bytes((1, 1, 1))  # none accepted, nothing queued
+    assert rig.device.log.counts["rejected"] == 1 and rig.adapter.status().refused_fills == 1
 
 
 def test_v13_v2_16bit_fill_integrates_exactly_what_was_sent() -> None:
@@ -218,12 +256,12 @@ def test_v13_v2_16bit_fill_integrates_exactly_what_was_sent() -> None:
     assert rig.fake.positions[:3] == [9180, -4590, 2286]
 
 
-def test_v13_on_the_engine_model_refuses_counts_its_7bit_entries_cannot_hold() -> None:
+def test_v13_on_the_engine_model_refuses_counts_above_its_per_slot_limit() -> None:
     rig = Rig("57E", "model")
     configure_v2(rig)
     reply = rig.ask(V13_FILL[0])
     assert reply[2] == 0  # not accepted: the host keeps the slots
-    assert rig.device.log.counts["ignored_value"] == 1
+    assert rig.device.log.counts["rejected"] == 1 and rig.adapter.status().refused_fills == 1
 
 
 @pytest.mark.parametrize("engine", ENGINES)

@@ -118,32 +118,30 @@ def test_state_change_acts_from_the_next_slot_and_the_running_slot_finishes(sim:
     assert engine.buffer.level == 7
 
 
-def test_empty_buffer_in_buffer_mode_emits_nothing_and_is_an_underrun_during_a_job(sim: Simulation) -> None:
+def test_empty_buffer_in_buffer_mode_emits_nothing_and_is_an_underrun_when_data_ends_it(sim: Simulation) -> None:
+    """Slots 0, 1 have data; 2..5 find the buffer empty; 6 has data again (an underrun of 4 slots); 7.. are the end."""
     engine = PulseEngine(sim)
-    engine.mark_job(True)
     engine.fill_buffer([encode_entry((1, 0, 0))] * 2)
     engine.set_state(EngineState.BUFFER)
-
-    def late_fill() -> None:
-        engine.fill_buffer([encode_entry((1, 0, 0))])
-
-    sim.call_at(5 * MS + 300_000, 30, late_fill)
-    sim.call_at(7 * MS + 300_000, 30, lambda: engine.mark_job(False))
+    sim.call_at(5 * MS + 300_000, 30, lambda: engine.fill_buffer([encode_entry((1, 0, 0))]))
     sim.run(until=12 * MS)
     assert _pulses(sim)[0] == [5_000, MS + 5_000, 6 * MS + 5_000]
-    assert [(u.t_start_ns, u.length_ns, u.slots) for u in engine.underruns] == [(2 * MS, 4 * MS, 4), (7 * MS, MS, 1)]
+    assert [(u.t_start, u.t_end, u.length, u.slots) for u in engine.underruns] == [(2 * MS, 6 * MS, 4 * MS, 4)]
     t, v = sim.trace.edges("pokeys.underrun")
-    assert list(zip(t.tolist(), v.tolist(), strict=True)) == [(0, 0), (2 * MS, 1), (6 * MS, 0), (7 * MS, 1),
-                                                              (7 * MS + 300_000, 0)]
+    assert list(zip(t.tolist(), v.tolist(), strict=True)) == [(0, 0), (2 * MS, 1), (6 * MS, 0)]
 
 
-def test_running_underrun_is_reported_with_its_length_so_far(sim: Simulation) -> None:
+def test_empty_slots_before_the_first_data_after_the_last_or_ended_by_a_state_change_are_no_underrun(
+        sim: Simulation) -> None:
     engine = PulseEngine(sim)
-    engine.mark_job(True)
-    engine.set_state(EngineState.BUFFER)
-    sim.run(until=3 * MS + 1)
-    assert engine.underruns == []
-    assert [(u.t_start_ns, u.length_ns) for u in engine.all_underruns] == [(0, 4 * MS)]
+    engine.set_state(EngineState.BUFFER)  # empty from 0 ms: the job has not started
+    sim.call_at(3 * MS + 1, 30, lambda: engine.fill_buffer([encode_entry((1, 0, 0))]))
+    sim.call_at(6 * MS + 1, 30, lambda: engine.set_state(EngineState.STOPPED))  # empty 5..6 ms, then stopped
+    sim.call_at(7 * MS + 1, 30, lambda: engine.fill_buffer([encode_entry((2, 0, 0))]))
+    sim.call_at(7 * MS + 1, 30, lambda: engine.set_state(EngineState.BUFFER))  # data at 8 ms, none after
+    sim.run(until=20 * MS)
+    assert _pulses(sim)[0] == [4 * MS + 5_000, 8 * MS + 5_000, 8 * MS + 505_000]
+    assert engine.underruns == [] and sim.trace.edges("pokeys.underrun")[1].tolist() == [0]
 
 
 def test_state_codes_are_recorded_on_the_state_signal(sim: Simulation) -> None:
@@ -161,3 +159,38 @@ def test_only_host_states_can_be_set(sim: Simulation, state: int) -> None:
     engine = PulseEngine(sim)
     with pytest.raises(ConfigurationError, match=rf"engine state = {state} is not allowed \(allowed: 0 stopped"):
         engine.set_state(state)
+
+
+def test_reconfigure_applies_switch_enables_direction_inversion_and_limits_from_now_on(sim: Simulation) -> None:
+    engine = PulseEngine(sim)
+    engine.switches.limit_pos[1].set(1)  # tripped, but not enabled
+    engine.fill_buffer([encode_entry((2, 0, 0))] * 10)
+    engine.set_state(EngineState.BUFFER)
+    y_on = (AxisConfig(invert_direction=True), AxisConfig(limit_pos_enabled=True), AxisConfig())
+    sim.call_at(3 * MS + 100_000, 30, lambda: engine.reconfigure(EngineConfig(axes=y_on)))
+    sim.run(until=10 * MS)
+    assert sim.trace.edges("pokeys.state")[1].tolist() == [0, 2, 100]  # the enabled limit is seen at 4 ms
+    assert sim.trace.edges("pokeys.state")[0].tolist()[-1] == 4 * MS
+    assert sim.trace.edges("pokeys.x.dir")[0].tolist() == [0, 3 * MS + 100_000]  # inverted at once: idle level 1
+    assert engine.status().positions == (8, 0, 0) and engine.config.axes[1].limit_pos_enabled
+
+
+@pytest.mark.parametrize(("fields", "message"), [
+    ({"model": "57E"}, r"reconfigure model = '57E' is not allowed \(allowed: '56E' \(fixed when the engine"),
+    ({"pulse_width_ns": 2_000}, r"reconfigure pulse_width_ns = 2000 is not allowed \(allowed: 5000 \(fixed"),
+])
+def test_reconfigure_keeps_the_model_and_the_pulse_width(sim: Simulation, fields: dict[str, object],
+                                                         message: str) -> None:
+    engine = PulseEngine(sim)
+    with pytest.raises(ConfigurationError, match=message):
+        engine.reconfigure(EngineConfig(**fields))  # type: ignore[arg-type]
+
+
+def test_reconfigured_emergency_polarity_keeps_a_healthy_input_healthy(sim: Simulation) -> None:
+    engine = PulseEngine(sim)
+    engine.set_state(EngineState.BUFFER)
+    engine.reconfigure(EngineConfig(emergency_polarity=1))
+    assert engine.switches.emergency.value == 1  # healthy for polarity 1 (low = emergency)
+    sim.call_at(2 * MS + 1, 30, lambda: engine.switches.emergency.set(0))
+    sim.run(until=5 * MS)
+    assert engine.state == EngineState.STOP_EMERGENCY and sim.trace.edges("pokeys.state")[0].tolist()[-1] == 3 * MS

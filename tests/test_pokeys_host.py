@@ -36,7 +36,7 @@ def _run(sim: Simulation, prefill: int, **host: object) -> tuple[PulseEngine, Ho
 
 def test_host_stall_causes_an_underrun_reported_with_start_and_length(sim: Simulation) -> None:
     engine, app = _run(sim, prefill=20)
-    assert [(u.t_start_ns, u.length_ns) for u in engine.underruns] == [(120 * MS, 41 * MS)]
+    assert [(u.t_start, u.length, u.slots) for u in engine.underruns] == [(120 * MS, 41 * MS, 41)]
     t, v = sim.trace.edges("pokeys.underrun")
     assert t.tolist() == [0, 120 * MS, 161 * MS] and v.tolist() == [0, 1, 0]
     assert engine.status().positions == (3000, 0, 0) and app.finished  # slots are late, not lost
@@ -46,7 +46,7 @@ def test_host_stall_causes_an_underrun_reported_with_start_and_length(sim: Simul
 
 def test_enough_prefill_rides_out_the_same_stall(sim: Simulation) -> None:
     engine, _ = _run(sim, prefill=100)
-    assert engine.all_underruns == []
+    assert engine.underruns == []
     t, level = sim.trace.edges("pokeys.buffer_level")
     running = (t > 10 * MS) & (t < 250 * MS)
     assert level[running].min() == 39  # 99 after the 100 ms slot, minus the slots 101..160 ms
@@ -55,8 +55,8 @@ def test_enough_prefill_rides_out_the_same_stall(sim: Simulation) -> None:
 
 def test_the_end_of_the_job_is_not_an_underrun(sim: Simulation) -> None:
     engine, app = _run(sim, prefill=100)
-    assert app.finished and engine.buffer.level == 0 and not engine.job_active
-    assert sim.trace.edges("pokeys.underrun")[1].tolist() == [0]
+    assert app.finished and engine.buffer.level == 0 and engine.state == EngineState.BUFFER
+    assert engine.underruns == [] and sim.trace.edges("pokeys.underrun")[1].tolist() == [0]
 
 
 def test_host_advances_its_read_pointer_by_the_accepted_count_only(sim: Simulation) -> None:
@@ -91,7 +91,7 @@ def test_a_job_over_either_link_runs_without_underrun(sim: Simulation, link: str
     engine = PulseEngine(sim)
     HostApp(sim, engine, JOB, link=link, prefill_slots=30)
     sim.run(until=400 * MS)
-    assert engine.all_underruns == [] and engine.status().positions == (3000, 0, 0)
+    assert engine.underruns == [] and engine.status().positions == (3000, 0, 0)
 
 
 @pytest.mark.parametrize(("make", "message"), [

@@ -2,17 +2,19 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from cosim.controllers.pokeys import EngineConfig, EngineState, PulseEngine, uniform_axes
-from cosim.controllers.pokeys.naive import NaivePulseEngine
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.kernel import Simulation
+from cosim.testing.pokeys_naive import naive_pulse_engine
 
 MS = 1_000_000
 
 
-def _run(kind: type[PulseEngine]) -> tuple[Simulation, PulseEngine]:
+def _run(kind: Callable[..., PulseEngine]) -> tuple[Simulation, PulseEngine]:
     sim = Simulation(seed=1)
     config = EngineConfig(axes=uniform_axes(accel=2_000_000, decel=2_000_000), dir_setup_ns=3_000)
     engine = kind(sim, config)
@@ -25,7 +27,7 @@ def _run(kind: type[PulseEngine]) -> tuple[Simulation, PulseEngine]:
 
 def test_naive_model_gives_the_same_pulses_one_event_each() -> None:
     fast_sim, fast = _run(PulseEngine)
-    naive_sim, naive = _run(NaivePulseEngine)
+    naive_sim, naive = _run(naive_pulse_engine)
     for axis in "xyz":
         t_fast, d_fast = fast_sim.trace.pulses(f"pokeys.{axis}.step")
         t_naive, d_naive = naive_sim.trace.pulses(f"pokeys.{axis}.step")

@@ -82,8 +82,9 @@ def test_to_entries_keeps_the_direction_bit_on_zero_counts() -> None:
 
 
 @pytest.mark.parametrize(("make", "message"), [
-    (lambda: Move((0, 0)), r"Move target axes = 2 is not allowed \(allowed: 3"),
-    (lambda: Move((0, 0, 0), speed_hz=25_001), r"Move speed_hz = 25001 is not allowed \(allowed: > 0..25000"),
+    (lambda: plan([Move((0, 0))], uniform_axes()), r"Move target axes = 2 is not allowed \(allowed: 3"),
+    (lambda: Move((0,) * 9), r"Move target axes = 9 is not allowed \(allowed: 1..8"),
+    (lambda: Move((0, 0, 0), speed_hz=0), r"Move speed_hz = 0 is not allowed \(allowed: > 0..125000"),
     (lambda: Move((0, 0, 0), accel=0), r"Move accel = 0 is not allowed \(allowed: > 0 pulses/s\^2"),
     (lambda: Dwell(-1), r"Dwell slots = -1 is not allowed"),
 ])

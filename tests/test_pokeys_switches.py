@@ -10,8 +10,6 @@ Inputs are normally closed: level 1 = tripped (the emergency input: 1 = emergenc
 
 from __future__ import annotations
 
-import pytest
-
 from cosim.controllers.pokeys import (
     AxisConfig,
     AxisState,
@@ -154,13 +152,24 @@ def test_jogging_does_not_ignore_the_emergency_input(sim: Simulation) -> None:
     assert _last_pulse(sim) < 11 * MS
 
 
-@pytest.mark.parametrize("state", [EngineState.INTERNAL, EngineState.STOPPED])
-def test_limit_stops_the_internal_controller_and_an_idle_engine_too(sim: Simulation, state: EngineState) -> None:
-    engine = PulseEngine(sim, EngineConfig(axes=(LIMITS_ON, LIMITS_ON, LIMITS_ON)))
-    if state == EngineState.INTERNAL:
-        engine.run_at((10_000, 0, 0))
+def test_limit_stops_the_internal_controller_at_the_next_slot_start(sim: Simulation) -> None:
+    """run_at 10 kHz at 1 pulse/slot^2 ramps 1, 2, 3, 4, 5, 6 pulses in the slots 0..5 ms; a trip at 5 ms + 1 is
+    seen at 6 ms."""
+    x = AxisConfig(limit_pos_enabled=True, accel=1_000_000, decel=1_000_000)
+    engine = PulseEngine(sim, EngineConfig(axes=(x, LIMITS_ON, LIMITS_ON)))
+    engine.run_at((10_000, 0, 0))
     play(sim, [(5 * MS + 1, {engine.switches.limit_pos[0]: 1})])
     sim.run(until=20 * MS)
     assert engine.state == EngineState.STOP_LIMIT
     t = sim.trace.pulses("pokeys.x.step")[0]
-    assert t.size == 0 or t[-1] < 6 * MS
+    assert t.size == 1 + 2 + 3 + 4 + 5 + 6  # pulses in every slot up to the one the trip falls in, none after
+    assert int(t[-1]) == 5 * MS + 5_000 + (5 * MS) // 6
+
+
+def test_limit_stops_an_idle_engine_too(sim: Simulation) -> None:
+    engine = PulseEngine(sim, EngineConfig(axes=(LIMITS_ON, LIMITS_ON, LIMITS_ON)))
+    play(sim, [(5 * MS + 1, {engine.switches.limit_pos[0]: 1})])
+    sim.run(until=20 * MS)
+    assert engine.state == EngineState.STOP_LIMIT
+    assert sim.trace.edges("pokeys.state")[0].tolist() == [0, 6 * MS]
+    assert sim.trace.pulses("pokeys.x.step")[0].size == 0

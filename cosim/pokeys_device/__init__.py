@@ -9,7 +9,8 @@ Modules: :mod:`.packets` (framing, checksum), :mod:`.layouts` (field layouts), :
 (discovery, handshake), :mod:`.commands_v1` / :mod:`.commands_v2` (pulse engine commands),
 :mod:`.io_commands` (benign I/O replies), :mod:`.adapter` (the engine interface), :mod:`.device`
 (request in, reply out), :mod:`.realtime` (wall-clock pacing, lag report), :mod:`.server`
-(asyncio UDP/TCP), :mod:`.client` (a client written from the protocol notes), :mod:`.cli`.
+(asyncio UDP/TCP), :mod:`.rig` (everything assembled), :mod:`.cli`. A client written from the
+protocol notes, for tests and examples, is :mod:`cosim.testing.pokeys_client`.
 """
 
 from __future__ import annotations
@@ -18,16 +19,16 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from cosim.pokeys_device.adapter import EngineAdapter, FakeEngine, PulseEngineAdapter
+    from cosim.pokeys_device.adapter import EngineAdapter, PulseEngineAdapter
     from cosim.pokeys_device.device import Device
     from cosim.pokeys_device.identity import DeviceIdentity
     from cosim.pokeys_device.packets import PORT
 
 _EXPORTS = {
     "PORT": "packets", "Device": "device", "DeviceIdentity": "identity", "EngineAdapter": "adapter",
-    "FakeEngine": "adapter", "PulseEngineAdapter": "adapter",
+    "PulseEngineAdapter": "adapter",
 }
-__all__ = ["PORT", "Device", "DeviceIdentity", "EngineAdapter", "FakeEngine", "PulseEngineAdapter"]
+__all__ = ["PORT", "Device", "DeviceIdentity", "EngineAdapter", "PulseEngineAdapter"]
 
 
 def __getattr__(name: str) -> Any:

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from cosim.pokeys_device.server import DeviceServer
 
 EXIT_PASS, EXIT_FAIL = 0, 1
-_SWITCH = re.compile(r"^\s*([xyz])\s*([+-]?)\s*=\s*([+-]?\d+)\s*$")
+_SWITCH = re.compile(r"^\s*([a-z])\s*([+-]?)\s*=\s*([+-]?\d+)\s*$")
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -71,7 +71,11 @@ def parse_switch(text: str, *, kind: str) -> tuple[int, str, int]:
         example = "x+=20000 or y-=-500" if kind == "limit" else "x=-500"
         raise ConfigurationError.out_of_range(f"--{kind}", text, f"AXIS{'(+|-)' if kind == 'limit' else ''}=POS, "
                                                                  f"e.g. {example}")
-    return "xyz".index(match.group(1)), match.group(2), int(match.group(3))
+    from cosim.controllers.pokeys import AXIS_NAMES
+
+    if match.group(1) not in AXIS_NAMES:
+        raise ConfigurationError.out_of_range(f"--{kind} axis", match.group(1), ", ".join(AXIS_NAMES))
+    return AXIS_NAMES.index(match.group(1)), match.group(2), int(match.group(3))
 
 
 def switch_wiring(limits: list[str], homes: list[str]) -> Callable[[Simulation, PulseEngine], None]:
@@ -83,6 +87,7 @@ def switch_wiring(limits: list[str], homes: list[str]) -> Callable[[Simulation, 
         from cosim.couplings.ideal_axis import PositionSwitch
 
         for kind, axis, side, at in specs:
+            engine.axis(axis, where=f"--{kind}")  # an axis this model drives
             if kind == "limit":
                 signal_ = (engine.switches.limit_pos if side == "+" else engine.switches.limit_neg)[axis]
             else:

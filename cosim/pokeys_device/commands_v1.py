@@ -5,7 +5,7 @@ else in a v1 reply and copies fields at fixed offsets (:mod:`.layouts`).
 
 Sub-commands (library call: device behaviour):
 
-* 0x30 ``PK_PEInfoGet``: 3 axes, 25 kHz, 128 slots, 1 ms;
+* 0x30 ``PK_PEInfoGet``: 3 axes, the model's kHz (25), 128 slots, 1 ms;
 * 0x00 ``PK_PEStatusGet``: positions, switches, state, axis states, enabled, charge pump;
 * 0x06 ``PK_PEStatusSet``: ``[3]`` engine enabled (disabled: nothing moves), ``[4]`` charge pump;
 * 0x01 ``PK_PECurrentPositionSet``: the x, y, z position counters;
@@ -17,7 +17,10 @@ Sub-commands (library call: device behaviour):
   direction inversion;
 * 0x14 / 0x15 kbd48CNC use, 0x03 MPG jog configuration: stored and returned;
 * 0x20 ``PK_PEHomingStart``: ``[8..10]`` = 1 homes that axis;
-* 0x35 ``PK_PEBufferFill``: at most 18 slots of 3 bytes; accepted count in ``[8]``, status from ``[9]``;
+* 0x35 ``PK_PEBufferFill``: at most 18 slots of 3 bytes; accepted count in ``[8]``, status from ``[9]``.
+  A slot the model cannot emit (more than 25 pulses, or the reserved x byte 0xFF) refuses the
+  whole fill, as the engine's API does: ``[8]`` = 0, counted as ``rejected`` (0xFF also as
+  ``special_entry``);
 * 0x36 ``PK_PEBufferFlush``: clear the buffer; 0x37 ``PK_PEBufferFreeSizeGet``: ``[8]`` free slots.
 """
 
@@ -25,24 +28,24 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from cosim.controllers.pokeys import EngineState
-from cosim.pokeys_device.adapter import EngineAdapter, EngineSettings
+from cosim.controllers.pokeys import MODELS, DeviceModel, EngineConfig, EngineState
+from cosim.pokeys_device.adapter import EngineAdapter
 from cosim.pokeys_device.common import PacketLog, accel_hz2, percent, reported_axis_state, speed_hz
 from cosim.pokeys_device.layouts import (
-    ENGINE_INFO_V1,
     PARAMS_V1_SLICE,
     V1_AXES,
     ParamsV1,
     StatusV1,
+    engine_info,
     put_status_v1,
 )
-from cosim.pokeys_device.packets import get_i32, new_reply, signed_entries
+from cosim.pokeys_device.packets import get_i32, new_reply
 
 COMMAND = 0x80
 FILL_SLOTS_MAX = 18
 """Slots one v1 fill carries (54 of the 56 payload bytes)."""
 SPECIAL_X_BYTE = 0xFF
-"""The vendor's reserved "special command" value of the x byte; taken as -127 (convention) and logged."""
+"""The vendor's reserved "special command" value of the x byte: never a count; the engine refuses the fill."""
 SWITCH_CONFIG = slice(8, 13)
 MPG_CONFIG = slice(8, 24)
 
@@ -56,11 +59,14 @@ class PulseEngineV1:
         The engine (at least 3 axes). It is disabled at power-on: the host enables it (0x06).
     notes : PacketLog
         Where refused commands and ignored values are counted.
+    model : DeviceModel
+        The device's figures (default the 56E's).
     """
 
-    def __init__(self, adapter: EngineAdapter, notes: PacketLog) -> None:
+    def __init__(self, adapter: EngineAdapter, notes: PacketLog, *, model: DeviceModel = MODELS["56E"]) -> None:
         self.adapter = adapter
         self.notes = notes
+        self.model = model
         self.charge_pump = 0
         settings = adapter.settings()
         self.params = _params_block(settings)
@@ -96,11 +102,11 @@ class PulseEngineV1:
         queued = s.queued_slots > 0
         axis_states = tuple(reported_axis_state(s.axis_states[a], enabled=enabled, queued=queued)
                             for a in range(V1_AXES))
-        return StatusV1(s.positions[:V1_AXES], s.limit_pos & 7, s.limit_neg & 7, s.home & 7, s.state, axis_states,
-                        int(enabled), int(bool(self.charge_pump)))
+        return StatusV1(s.positions[:V1_AXES], s.limit_pos & 7, s.limit_neg & 7, s.home & 7, int(s.engine_state),
+                        axis_states, int(enabled), int(bool(self.charge_pump)))
 
     def _info(self, request: bytes, reply: bytearray) -> None:
-        reply[8:12] = ENGINE_INFO_V1
+        reply[8:12] = engine_info(self.model, axes=V1_AXES)
 
     def _status(self, request: bytes, reply: bytearray) -> None:
         put_status_v1(reply, self.status())
@@ -112,7 +118,7 @@ class PulseEngineV1:
     def _enable(self, request: bytes, reply: bytearray) -> None:
         self.charge_pump = request[4]
         self.adapter.set_enabled(bool(request[3]))
-        if self.adapter.enabled and self.adapter.status().state == EngineState.INTERNAL:
+        if self.adapter.enabled and self.adapter.status().engine_state == EngineState.INTERNAL:
             self._apply_reference()
 
     def _set_state(self, request: bytes, reply: bytearray) -> None:
@@ -131,7 +137,7 @@ class PulseEngineV1:
             self.notes.count("ignored_value", f"0x80/0x05 mode [3] = {mode} (allowed: 0 position, 10 speed)")
             return
         self._reference = (mode, tuple(get_i32(request, 8 + 4 * a) for a in range(V1_AXES)))
-        if self.adapter.enabled and self.adapter.status().state == EngineState.INTERNAL:
+        if self.adapter.enabled and self.adapter.status().engine_state == EngineState.INTERNAL:
             self._apply_reference()
 
     def _apply_reference(self) -> None:
@@ -166,7 +172,7 @@ class PulseEngineV1:
             axes[a] = replace(
                 axes[a],
                 max_speed_hz=speed_hz(wire.max_speed[a], axes[a].max_speed_hz, what=f"{where} max speed",
-                                      notes=self.notes),
+                                      notes=self.notes, high=self.model.max_rate_hz),
                 accel=accel_hz2(wire.accel[a], axes[a].accel, what=f"{where} acceleration", notes=self.notes),
                 decel=accel_hz2(wire.decel[a], axes[a].decel, what=f"{where} deceleration", notes=self.notes))
         polarity = wire.emergency_polarity
@@ -194,9 +200,9 @@ class PulseEngineV1:
                               invert_direction=bool(invert >> a & 1), invert_homing=bool(invert_homing >> a & 1))
         self._configure(replace(old, axes=tuple(axes)))
 
-    def _configure(self, settings: EngineSettings) -> None:
+    def _configure(self, config: EngineConfig) -> None:
         with self.notes.rejecting("configuration"):
-            self.adapter.configure(settings)
+            self.adapter.configure(config)
 
     def _get_keyboard(self, request: bytes, reply: bytearray) -> None:
         reply[8] = self.keyboard
@@ -212,12 +218,14 @@ class PulseEngineV1:
     # -- buffer -----------------------------------------------------------------------------------
     def _fill(self, request: bytes, reply: bytearray) -> None:
         offered = min(request[3], FILL_SLOTS_MAX)
-        slots = signed_entries(request[8:], offered, V1_AXES, width=1)
-        for s in range(offered):
-            if request[8 + 3 * s] == SPECIAL_X_BYTE:
-                self.notes.count("special_entry", f"0x80/0x35 slot {s}: x byte 0xFF taken as -127")
-        pad = (0,) * (self.adapter.axes - V1_AXES)
-        accepted = self.adapter.fill([slot + pad for slot in slots])
+        pad = bytes(self.adapter.axes - V1_AXES)
+        slots = [bytes(request[8 + V1_AXES * s:8 + V1_AXES * (s + 1)]) + pad for s in range(offered)]
+        for s, slot in enumerate(slots):
+            if slot[0] == SPECIAL_X_BYTE:
+                self.notes.count("special_entry", f"0x80/0x35 slot {s}: x byte 0xFF, the reserved special command")
+        accepted = 0
+        with self.notes.rejecting("0x80/0x35 fill"):
+            accepted = self.adapter.fill(slots)
         reply[8] = accepted
         put_status_v1(reply, self.status(), offset=9, with_enable=False)
 
@@ -225,14 +233,14 @@ class PulseEngineV1:
         self.adapter.clear_buffer()
 
 
-def _params_block(settings: EngineSettings) -> bytes:
+def _params_block(settings: EngineConfig) -> bytes:
     axes = settings.axes[:V1_AXES]
-    return ParamsV1(tuple(a.max_speed_hz / 1000 for a in axes), tuple(a.accel / 1e6 for a in axes),
-                    tuple(a.decel / 1e6 for a in axes), settings.homing_speed_pct, settings.homing_return_pct,
+    return ParamsV1(tuple(float(a.max_speed_hz) / 1000 for a in axes), tuple(float(a.accel) / 1e6 for a in axes),
+                    tuple(float(a.decel) / 1e6 for a in axes), settings.homing_speed_pct, settings.homing_return_pct,
                     settings.emergency_polarity).to_bytes()
 
 
-def _switch_block(settings: EngineSettings) -> bytes:
+def _switch_block(settings: EngineConfig) -> bytes:
     axes = settings.axes[:V1_AXES]
 
     def mask(flag: str) -> int:

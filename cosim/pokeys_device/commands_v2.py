@@ -9,15 +9,18 @@ parameters, 0x04 external outputs, 0x08 status 2, 0x10/0x11 axis records, 0x20 m
 homing, 0xF0 clear, 0xFF/0xFE fills, 0xB0 large fill; 0x0A, 0x0B, 0x18, 0x19 stored and echoed.
 Every other sub-command gets the benign reply (sub-command echo, zeros).
 
-The engine model drives ``adapter.axes`` axes (3); the status block has 8. Axes beyond the model
-keep their records and positions (set by 0x03) but never move.
+The engine model drives ``adapter.axes`` axes (3 on a 57E, 8 on a 57CNC); the status block has 8.
+Axes beyond the model keep their records and positions (set by 0x03) but never move. A fill slot
+the model cannot emit (more pulses than its per-slot limit: 25 on a 57E, 125 on a 57CNC; an
+8-bit 0xFF is -127, a 16-bit entry can hold 32767) refuses the whole fill, as the engine's API
+does: ``[2]`` = 0 accepted, counted as ``rejected``.
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from cosim.controllers.pokeys import EngineState
+from cosim.controllers.pokeys import MODELS, DeviceModel, EngineState
 from cosim.pokeys_device.adapter import EngineAdapter
 from cosim.pokeys_device.common import PacketLog, accel_hz2, bits, percent, reported_axis_state, speed_hz
 from cosim.pokeys_device.layouts import (
@@ -34,6 +37,7 @@ from cosim.pokeys_device.layouts import (
     V2_AXES,
     AxisRecord,
     StatusV2,
+    engine_info,
     put_status_v2,
     status_check,
 )
@@ -68,11 +72,14 @@ class PulseEngineV2:
     ----------
     adapter : EngineAdapter
     notes : PacketLog
+    model : DeviceModel
+        The device's figures (default the 57E's).
     """
 
-    def __init__(self, adapter: EngineAdapter, notes: PacketLog) -> None:
+    def __init__(self, adapter: EngineAdapter, notes: PacketLog, *, model: DeviceModel = MODELS["57E"]) -> None:
         self.adapter = adapter
         self.notes = notes
+        self.model = model
         self.setup = bytes(6)
         self.records = [AxisRecord() for _ in range(V2_AXES)]
         self.raw_records = [bytes(RECORD_SLICE.stop - RECORD_SLICE.start)] * V2_AXES
@@ -123,7 +130,7 @@ class PulseEngineV2:
     def status(self) -> StatusV2:
         """The status block now."""
         s = self.adapter.status()
-        state = v2_state(s.state)
+        state = v2_state(s.engine_state)
         queued = s.queued_slots > 0
         axis_states = []
         positions = list(self.extra_positions)
@@ -137,7 +144,7 @@ class PulseEngineV2:
         setup = self.setup
         return StatusV2(0, setup[5], self.limit_override, setup[0], 1, state, setup[1], s.limit_pos & 0xFF,
                         s.limit_neg & 0xFF, s.home & 0xFF, setup[2], tuple(axis_states), tuple(positions),
-                        emergency_polarity=setup[4])
+                        info=engine_info(self.model, axes=V2_AXES), emergency_polarity=setup[4])
 
     def _status(self, request: bytes, reply: bytearray) -> None:
         put_status_v2(reply, self.status())
@@ -244,7 +251,7 @@ class PulseEngineV2:
                 axes[a] = replace(
                     axes[a],
                     max_speed_hz=speed_hz(r.max_speed, axes[a].max_speed_hz, what=f"{where} max speed",
-                                          notes=self.notes),
+                                          notes=self.notes, high=self.model.max_rate_hz),
                     accel=accel_hz2(r.accel, axes[a].accel, what=f"{where} acceleration", notes=self.notes),
                     decel=accel_hz2(r.decel, axes[a].decel, what=f"{where} deceleration", notes=self.notes))
                 if r.homing_speed_pct:
@@ -263,9 +270,9 @@ class PulseEngineV2:
         if not self._planner_axes():
             self.notes.count("ignored_value", "0x85/0x20 move: no axis uses the internal planner")
             return
-        if v2_state(self.adapter.status().state) == RUNNING:
+        if v2_state(self.adapter.status().engine_state) == RUNNING:
             with self.notes.rejecting("0x85/0x20 move"):
-                if self.adapter.status().state != EngineState.INTERNAL:
+                if self.adapter.status().engine_state != EngineState.INTERNAL:
                     self.adapter.set_state(EngineState.INTERNAL)
                 self._apply_references()
 
@@ -317,16 +324,14 @@ class PulseEngineV2:
         n = self.adapter.axes
         driven = [a for a in range(min(n, axes_per_slot))
                   if self.records[a].config & CFG_ENABLED and not self.records[a].config & CFG_INTERNAL_PLANNER]
-        limit = self.adapter.max_count
         counts = []
-        for s, slot in enumerate(slots):
+        for slot in slots:
             row = [0] * n
             for a in driven:
                 row[a] = slot[a]
-            if limit is not None and max(map(abs, row)) > limit:
-                self.notes.count("ignored_value", f"fill slot {s}: a count above the engine's {limit} pulses per "
-                                                  "slot; this and the following slots are not accepted")
-                break
             counts.append(row)
-        return self.adapter.fill(counts)
+        accepted = 0
+        with self.notes.rejecting(f"{width * 8}-bit fill"):
+            accepted = self.adapter.fill(counts)
+        return accepted
 

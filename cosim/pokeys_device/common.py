@@ -14,8 +14,9 @@ import math
 from collections import Counter, deque
 from collections.abc import Iterator
 from contextlib import contextmanager
+from fractions import Fraction
 
-from cosim.controllers.pokeys.limits import MAX_RATE_HZ
+from cosim.controllers.pokeys import MAX_RATE_HZ
 from cosim.errors import ConfigurationError
 
 log = logging.getLogger("cosim.pokeys_device")
@@ -76,21 +77,23 @@ def reported_axis_state(engine_axis_state: int, *, enabled: bool, queued: bool) 
     return 2 if queued else 1
 
 
-def speed_hz(per_ms: float, old: int, *, what: str, notes: PacketLog) -> int:
-    """A maximum speed from the wire (float32 pulses/ms) as whole pulses/s, 1..25000.
+def speed_hz(per_ms: float, old: int | Fraction | float, *, what: str, notes: PacketLog,
+             high: int = MAX_RATE_HZ) -> int | Fraction | float:
+    """A maximum speed from the wire (float32 pulses/ms) as whole pulses/s, 1..``high`` (the model's, 25000).
 
-    Not finite or not positive: keep ``old`` (counted as ``ignored_value``); above 25 kHz: 25000.
+    Not finite or not positive: keep ``old`` (counted as ``ignored_value``); above ``high``: ``high``.
     """
     if not math.isfinite(per_ms) or per_ms <= 0:
         notes.count("ignored_value", f"{what} = {per_ms!r} pulses/ms (allowed: > 0); kept {old} pulses/s")
         return old
     hz = round(per_ms * 1000)
-    if not 1 <= hz <= MAX_RATE_HZ:
-        notes.count("ignored_value", f"{what} = {per_ms!r} pulses/ms is outside 0.001..25; clamped")
-    return max(1, min(MAX_RATE_HZ, hz))
+    if not 1 <= hz <= high:
+        notes.count("ignored_value", f"{what} = {per_ms!r} pulses/ms is outside 0.001..{high // 1000}; clamped")
+    return max(1, min(high, hz))
 
 
-def accel_hz2(per_ms2: float, old: int, *, what: str, notes: PacketLog) -> int:
+def accel_hz2(per_ms2: float, old: int | Fraction | float, *, what: str,
+              notes: PacketLog) -> int | Fraction | float:
     """An acceleration from the wire (float32 pulses/ms^2) as whole pulses/s^2 (> 0)."""
     if not math.isfinite(per_ms2) or per_ms2 <= 0:
         notes.count("ignored_value", f"{what} = {per_ms2!r} pulses/ms^2 (allowed: > 0); kept {old} pulses/s^2")

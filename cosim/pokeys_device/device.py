@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+from cosim.controllers.pokeys import device_model
 from cosim.pokeys_device.adapter import EngineAdapter
 from cosim.pokeys_device.commands_v1 import PulseEngineV1
 from cosim.pokeys_device.commands_v2 import PulseEngineV2
@@ -43,16 +44,23 @@ class Device:
     identity : DeviceIdentity
         56E (pulse engine v1, command 0x80) or 57E / 57CNC (pulse engine v2, 0x85 and 0xB0).
     adapter : EngineAdapter
-        The engine behind the handlers.
+        The engine behind the handlers (built for the same model:
+        ``EngineConfig.for_model(identity.model)``, which :class:`~.rig.VirtualPoKeys` does).
+
+    Attributes
+    ----------
+    model : DeviceModel
+        The model's figures the device reports (engine info, maximum frequency).
     """
 
     def __init__(self, identity: DeviceIdentity, adapter: EngineAdapter) -> None:
         self.identity = identity
         self.adapter = adapter
+        self.model = device_model(identity.model)
         self.log = PacketLog()
         self.io = IoCommands()
-        self.v1 = PulseEngineV1(adapter, self.log) if identity.pulse_engine == 1 else None
-        self.v2 = PulseEngineV2(adapter, self.log) if identity.pulse_engine == 2 else None
+        self.v1 = PulseEngineV1(adapter, self.log, model=self.model) if identity.pulse_engine == 1 else None
+        self.v2 = PulseEngineV2(adapter, self.log, model=self.model) if identity.pulse_engine == 2 else None
 
     def discovery(self, *, device_ip: str = "127.0.0.1", host_ip: str = "127.0.0.1") -> bytes:
         """Reply to an empty UDP datagram (14 or 19 bytes)."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 import struct
 from dataclasses import astuple, dataclass
 
+from cosim.controllers.pokeys import BUFFER_SLOTS, SLOT_NS, DeviceModel
 from cosim.pokeys_device.packets import get_i32, put_i32
 
 V1_AXES = 3
@@ -28,6 +29,15 @@ ENGINE_INFO_V1 = bytes((3, 25, 128, 10))
 """0x80/0x30 ``[8..11]``: 3 axes, 25 kHz, 128 slots, slot time 10 x 100 us."""
 ENGINE_INFO_V2 = bytes((V2_AXES, 25, 128, 10))
 """v2 status ``[56..59]``: 8 axes, 25 kHz (internal generator), 128 slots, 10 x 100 us."""
+
+
+def engine_info(model: DeviceModel, *, axes: int) -> bytes:
+    """Engine info bytes (v1 0x80/0x30 ``[8..11]``, v2 status ``[56..59]``) for ``model``.
+
+    ``axes``, maximum frequency [kHz] = the model's pulses per 1 ms slot, buffer depth [slots],
+    slot time [100 us]: ``(3, 25, 128, 10)`` for a 56E, ``(8, 125, 128, 10)`` for a 57CNC.
+    """
+    return bytes((axes, model.max_pulses_per_slot, BUFFER_SLOTS, SLOT_NS // 100_000))
 STATUS_CHECK_OFFSET = 0x5A
 """v2 status reply ``[63]`` = (request ``[3]`` + 0x5A) mod 256."""
 

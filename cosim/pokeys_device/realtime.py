@@ -11,8 +11,9 @@ slot the wall clock is in::
 Catch-ups happen at every slot boundary (ticker threads sleep to the boundary) and before every
 request (:meth:`RealtimePacer.current`), so a host always sees the device as of the current slot
 and a command acts before the next slot start, as on the device. Simulated instants are always
-exact integer ticks ``sim0 + k * slot_ns``; only the decision *when* to run comes from the wall
-clock. One lock guards the simulation: whichever thread holds it runs it.
+exact integer ticks ``sim0 + k * slot_ticks`` (the slot converted once to the simulation's
+resolution); only the decision *when* to run comes from the wall clock (in nanoseconds). One lock
+guards the simulation: whichever thread holds it runs it.
 
 On a virtual machine a CPU now and then stalls for milliseconds. There is one ticker per CPU (up to
 ``tickers``), each pinned to its CPU, all waking at every boundary: the first one awake catches up,
@@ -34,10 +35,11 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
-from cosim.controllers.pokeys.limits import SLOT_NS
+from cosim.controllers.pokeys import SLOT_NS
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.signals import Sampled
+from cosim.validate import integer
 
 Clock = Callable[[], int]
 
@@ -57,7 +59,7 @@ class LagReport:
     catch_ups : int
         Catch-ups that ran the simulation.
     worst_t_ns : int
-        Simulated start of the slot with the largest lag.
+        Simulated start of the slot with the largest lag [ns].
     rt_priority : int or None
         The SCHED_FIFO priority pacing ran with (None: normal scheduling).
     tickers : int
@@ -94,7 +96,8 @@ class RealtimePacer:
     sim : Simulation
         Its clock must be on the slot grid when :meth:`start` is called.
     slot_ns : int
-        Slot length [ns] in both clocks (1 ms).
+        Slot length [ns] (1 ms): of wall time, and of simulated time (``slot_ticks`` at the
+        simulation's resolution).
     clock : callable
         Wall clock [ns] (``time.monotonic_ns``; a fake one in tests).
     record_lag : bool
@@ -113,15 +116,13 @@ class RealtimePacer:
 
     def __init__(self, sim: Simulation, *, slot_ns: int = SLOT_NS, clock: Clock = time.monotonic_ns,
                  record_lag: bool = True, rt_priority: int | None = None, tickers: int = 2) -> None:
-        if isinstance(slot_ns, bool) or not isinstance(slot_ns, int) or slot_ns <= 0:
-            raise ConfigurationError.out_of_range("slot_ns", slot_ns, "> 0 ns (an integer)")
-        if rt_priority is not None and (isinstance(rt_priority, bool) or not isinstance(rt_priority, int)
-                                        or not 1 <= rt_priority <= 99):
-            raise ConfigurationError.out_of_range("rt_priority", rt_priority, "1..99 (SCHED_FIFO) or None")
-        if isinstance(tickers, bool) or not isinstance(tickers, int) or not 1 <= tickers <= 8:
-            raise ConfigurationError.out_of_range("tickers", tickers, "1..8")
+        integer(slot_ns, "slot_ns", low=1, allowed="> 0 ns (an integer)")
+        if rt_priority is not None:
+            integer(rt_priority, "rt_priority", low=1, high=99, allowed="1..99 (SCHED_FIFO) or None")
+        integer(tickers, "tickers", low=1, high=8)
         self.sim = sim
         self.slot_ns = slot_ns
+        self.slot_ticks = sim.ticks(slot_ns, "ns", name="slot_ns")
         self.clock = clock
         self.rt_priority = rt_priority
         self.rt_applied: int | None = None
@@ -181,7 +182,7 @@ class RealtimePacer:
             return
         while True:  # until up to date: the wall clock moves on while the simulation runs
             wall = self.clock() - self._wall0
-            target = self._sim0 + (wall // self.slot_ns + 1) * self.slot_ns
+            target = self._sim0 + (wall // self.slot_ns + 1) * self.slot_ticks
             first = self.sim.now
             if target <= first:
                 return
@@ -189,9 +190,9 @@ class RealtimePacer:
             self._account(first, target, self.clock() - self._wall0)
 
     def _account(self, first: int, target: int, done: int) -> None:
-        """Lag of the slots ``[first, target)``, all processed at wall time ``done`` (since ``wall0``)."""
-        n = (target - first) // self.slot_ns
-        first_wall = first - self._sim0
+        """Lag of the slots ``[first, target)`` [ticks], all processed at wall time ``done`` [ns since ``wall0``]."""
+        n = (target - first) // self.slot_ticks
+        first_wall = (first - self._sim0) // self.slot_ticks * self.slot_ns
         lag_first = done - first_wall  # slot k started at wall instant first_wall + k * slot_ns
         if lag_first > self._lag_max_ns:
             self._lag_max_ns, self._worst_t = lag_first, first
@@ -201,13 +202,14 @@ class RealtimePacer:
         self._slots += n
         self._catch_ups += 1
         if self._lag_signal is not None:
-            self._lag_signal.record((done - (target - self.slot_ns - self._sim0)) // 1000)
+            self._lag_signal.record((done - (first_wall + (n - 1) * self.slot_ns)) // 1000)
 
     def report(self) -> LagReport:
         """The lag so far."""
         mean = self._lag_sum_ns / self._slots / self.slot_ns if self._slots else 0.0
+        worst_ns = int(self._worst_t * self.sim.timebase.resolution_s * 10**9)
         return LagReport(self._slots, self._lag_max_ns / self.slot_ns, mean, self._late, self._catch_ups,
-                         self._worst_t, self.rt_applied, len(self._tickers))
+                         worst_ns, self.rt_applied, len(self._tickers))
 
     async def run(self, stop: asyncio.Event) -> None:
         """Pace until ``stop`` is set (await it in the serving event loop)."""

@@ -6,97 +6,38 @@
                       │
                  PulseEngineAdapter ── Device (protocol) ── DeviceServer (UDP/TCP, :mod:`.server`)
                       │
-                 RealtimePacer (one slot per wall-clock ms) + UnderrunWatch
+                 RealtimePacer (one slot per wall-clock ms)
+
+The engine is built for the identity's model (``EngineConfig.for_model``: 3 axes and 25 pulses
+per slot on a 56E or 57E, 8 axes and 125 on a 57CNC). Underruns and refused fills are the
+engine's own records (:attr:`PulseEngine.underruns`, :attr:`PulseEngine.refusals`).
 
 When the server stops, :meth:`VirtualPoKeys.finish` runs the PoKeys checks over every recorded pulse
-(at most 25 per slot, pulses at least 40 us apart, direction set up before each pulse), writes the
-trace exports and a ``device.json`` summary (lag report, packet counters, underruns).
+(at most the model's pulses per slot, pulses at least the matching spacing apart, direction set up
+before each pulse) and that no fill was refused, writes the trace exports and a ``device.json``
+summary (lag report, packet counters, underruns, refusals).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable, Generator
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cosim.checks import CheckResult, DirectionSetup, MinPulseSpacing, PulsesPerWindow
-from cosim.controllers.pokeys import AXES, MAX_PULSES_PER_SLOT, SLOT_NS, EngineConfig, EngineState, PulseEngine
+from cosim.checks import CheckResult, DirectionSetup, MinPulseSpacing, PulsesPerWindow, ValueAt
+from cosim.controllers.pokeys import EngineConfig, PulseEngine
+from cosim.errors import ConfigurationError
 from cosim.export import write_trace
-from cosim.kernel import At, Simulation
+from cosim.kernel import Simulation
 from cosim.pokeys_device.adapter import PulseEngineAdapter
 from cosim.pokeys_device.device import Device
 from cosim.pokeys_device.identity import DeviceIdentity
 from cosim.pokeys_device.realtime import LagReport, RealtimePacer
-from cosim.timebase import Priority
 
 Wiring = Callable[[Simulation, PulseEngine], None]
 """``wire(sim, engine)``: couples plants (steppers, switch doubles) to the engine's signals."""
-
-
-@dataclass(frozen=True)
-class Underrun:
-    """Slots of buffer mode that found the buffer empty, between two slots that had data.
-
-    Attributes
-    ----------
-    t_start_ns : int
-        Start of the first empty slot.
-    slots : int
-        Empty slots in a row.
-    """
-
-    t_start_ns: int
-    slots: int
-
-
-class UnderrunWatch:
-    """Finds buffer underruns as the host sees them: an empty buffer in buffer mode that data ends.
-
-    Just before every slot start (priority SLOT - 1) it looks at the buffer level the engine is
-    about to pop from. Empty slots in buffer mode after data start a stretch; the stretch is an
-    underrun if data comes again while still in buffer mode. A stretch that lasts until the state
-    changes or the run ends is the end of a job, not an underrun. Confirmed underruns are recorded
-    as ``pokeys_device.underrun`` (1 during the empty slots).
-    """
-
-    def __init__(self, sim: Simulation, engine: PulseEngine) -> None:
-        self.sim = sim
-        self.engine = engine
-        self.underruns: list[Underrun] = []
-        self._armed = False
-        self._stretch: tuple[int, int] | None = None
-        self._name = "pokeys_device.underrun"
-        sim.trace.declare(self._name, "bit", description="1 during slots that found the buffer empty mid-job")
-        sim.trace.record(self._name, sim.now, 0)
-        sim.process(self.watch_slots())
-
-    def watch_slots(self) -> Generator[Any, Any, None]:
-        """SimPy process: one look per slot start, before the engine's."""
-        t0, env = self.engine.t0_ns, self.sim.env
-        k = 0
-        while True:
-            t = t0 + k * SLOT_NS
-            yield At(env, t, Priority.SLOT - 1)
-            self.look(t)
-            k += 1
-
-    def look(self, t: int) -> None:
-        """The buffer level the slot starting at ``t`` will pop from."""
-        if self.engine.state != EngineState.BUFFER:
-            self._armed, self._stretch = False, None
-            return
-        if self.engine.buffer.level:
-            if self._stretch is not None:
-                start, slots = self._stretch
-                self.underruns.append(Underrun(start, slots))
-                self.sim.trace.record(self._name, start, 1)
-                self.sim.trace.record(self._name, t, 0)
-            self._armed, self._stretch = True, None
-        elif self._armed:
-            start, slots = self._stretch or (t, 0)
-            self._stretch = (start, slots + 1)
 
 
 @dataclass
@@ -108,7 +49,6 @@ class VirtualPoKeys:
     adapter: PulseEngineAdapter
     device: Device
     pacer: RealtimePacer
-    watch: UnderrunWatch
     results: list[CheckResult] = field(default_factory=list)
 
     @classmethod
@@ -121,7 +61,8 @@ class VirtualPoKeys:
         identity : DeviceIdentity, optional
             Default: the PoKeys57E preset (pulse engine v2).
         config : EngineConfig, optional
-            The engine's power-on configuration (the host may change it over the protocol).
+            The engine's power-on configuration (the host may change it over the protocol);
+            default ``EngineConfig.for_model(identity.model)``. Its model must be the identity's.
         seed : int
             Seed of ``sim.rng`` (for plants that draw random numbers).
         wire : callable, optional
@@ -129,30 +70,40 @@ class VirtualPoKeys:
         rt_priority : int, optional
             SCHED_FIFO priority for the pacing threads (see :class:`RealtimePacer`).
         """
+        identity = identity or DeviceIdentity.preset("57E")
+        config = config or EngineConfig.for_model(identity.model)
+        if config.model != identity.model:
+            raise ConfigurationError.out_of_range("engine model", config.model,
+                                                  f"{identity.model} (the identity's model)")
         sim = Simulation(seed=seed)
-        engine = PulseEngine(sim, config or EngineConfig())
+        engine = PulseEngine(sim, config)
         if wire is not None:
             wire(sim, engine)
         adapter = PulseEngineAdapter(engine)
-        device = Device(identity or DeviceIdentity.preset("57E"), adapter)
+        device = Device(identity, adapter)
         pacer = RealtimePacer(sim, rt_priority=rt_priority)
-        return cls(sim, engine, adapter, device, pacer, UnderrunWatch(sim, engine))
+        return cls(sim, engine, adapter, device, pacer)
 
     def checks(self) -> list[CheckResult]:
-        """The PoKeys checks over every recorded pulse (an axis without pulses passes)."""
-        trace, cfg = self.sim.trace, self.engine.config
+        """The PoKeys checks over every recorded pulse (an axis without pulses passes), and no refused fill."""
+        trace, engine = self.sim.trace, self.engine
+        cfg, device = engine.config, engine.device
+        limit, spacing_us = device.max_pulses_per_slot, device.min_spacing_ns // 1000
+        spacing = self.sim.ticks(device.min_spacing_ns, "ns")
         results = []
-        for a, axis in enumerate(AXES):
-            step, direction = f"{self.engine.name}.{axis}.step", f"{self.engine.name}.{axis}.dir"
+        for a, axis in enumerate(engine.axis_names):
+            step, direction = f"{engine.name}.{axis}.step", f"{engine.name}.{axis}.dir"
             positive_level = 1 if cfg.axes[a].invert_direction else 0
             results += [
-                PulsesPerWindow(step, MAX_PULSES_PER_SLOT, SLOT_NS, allow_empty=True,
-                                name=f"{axis}: at most {MAX_PULSES_PER_SLOT} pulses per 1 ms slot").evaluate(trace),
-                MinPulseSpacing(step, SLOT_NS // MAX_PULSES_PER_SLOT, allow_empty=True,
-                                name=f"{axis}: pulses at least 40 us apart").evaluate(trace),
-                DirectionSetup(step, direction, cfg.dir_setup_ns, positive_level=positive_level, allow_empty=True,
-                               name=f"{axis}: direction set up before each pulse").evaluate(trace),
+                PulsesPerWindow(step, limit, engine.slot_ticks, allow_empty=True,
+                                name=f"{axis}: at most {limit} pulses per 1 ms slot").evaluate(trace),
+                MinPulseSpacing(step, spacing, allow_empty=True,
+                                name=f"{axis}: pulses at least {spacing_us} us apart").evaluate(trace),
+                DirectionSetup(step, direction, engine.dir_setup_ticks, positive_level=positive_level,
+                               allow_empty=True, name=f"{axis}: direction set up before each pulse").evaluate(trace),
             ]
+        results.append(ValueAt(engine.refused_fills.name, None, 0,
+                               name=f"no fill refused (an entry a PoKeys{device.name} cannot emit)").evaluate(trace))
         return results
 
     def summary(self) -> dict[str, Any]:
@@ -160,15 +111,22 @@ class VirtualPoKeys:
         lag: LagReport = self.pacer.report()
         return {
             "identity": asdict(self.device.identity),
-            "simulated_ns": self.sim.now,
+            "simulated_ns": self._ns(self.sim.now),
             "lag": {**asdict(lag), "kept_up": lag.kept_up},
             "packets": dict(self.device.log.counts),
-            "underruns": [asdict(u) for u in self.watch.underruns],
+            "underruns": [{"t_start_ns": self._ns(u.t_start), "length_ns": self._ns(u.length), "slots": u.slots}
+                          for u in self.engine.underruns],
+            "refusals": [{"t_ns": self._ns(r.t), "slot": r.slot, "axis": self.engine.axis_names[r.axis],
+                          "count": r.count, "limit": r.limit, "reason": r.reason} for r in self.engine.refusals],
             "positions": list(self.engine.status().positions),
             "pulses": [train.position for train in self.engine.steps],
             "checks": [r.summary() for r in self.results],
             "passed": all(r.passed for r in self.results),
         }
+
+    def _ns(self, ticks: int) -> int:
+        """``ticks`` in nanoseconds (the device's simulation runs at 1 ns, or any whole-ns resolution)."""
+        return int(ticks * self.sim.timebase.resolution_s * 10**9)
 
     def finish(self, out: str | Path | None = None, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> dict[str, Any]:
         """After the server stopped: run the checks, write the trace and ``device.json`` into ``out``."""

@@ -11,7 +11,7 @@ Checks: on every axis the last pulse comes within one slot of the emergency edge
 from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, PulseRef, ValueAt
-from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
+from cosim.controllers.pokeys import AXES, EngineConfig, PulseEngine, uniform_axes
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.controllers.scripted import play
@@ -33,7 +33,7 @@ def scenario(run: Run) -> None:
 
     edge = EdgeRef("pokeys.emergency", 1)
     for axis in AXES:
-        run.check(Duration(edge, PulseRef(f"pokeys.{axis}.step", "last"), max=SLOT_NS,
+        run.check(Duration(edge, PulseRef(f"pokeys.{axis}.step", "last"), max=engine.slot_ticks,
                            name=f"{axis}: no pulse after the slot boundary at which the emergency is seen"))
     run.check(ValueAt("pokeys.state", None, 101, name="engine stopped by the emergency input"))
     run.figure("positions_at_stop", lambda: float(engine.status().positions[0]), "pulses (x)")

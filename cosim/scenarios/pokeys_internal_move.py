@@ -16,7 +16,7 @@ from __future__ import annotations
 from math import ceil
 
 from cosim.checks import Duration, IntervalsAbove, PulseRef, PulsesPerWindow, ValueAt
-from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine, uniform_axes
+from cosim.controllers.pokeys import EngineConfig, PulseEngine, uniform_axes
 from cosim.scenario import Param, Run
 
 PARAMETERS = (
@@ -36,14 +36,14 @@ def scenario(run: Run) -> None:
 
     per_slot = p.max_speed_hz // 1000
     for axis, target in (("x", p.target_x), ("y", p.target_y)):
-        run.check(PulsesPerWindow(f"pokeys.{axis}.step", per_slot, SLOT_NS,
+        run.check(PulsesPerWindow(f"pokeys.{axis}.step", per_slot, engine.slot_ticks,
                                   name=f"{axis}: at most {per_slot} pulses per slot (max speed)"))
         run.check(ValueAt(f"pokeys.{axis}.position", None, target, name=f"{axis}: target {target} reached"))
     run.check(IntervalsAbove("pokeys.buffer_level", config.internal_lookahead_slots,
                              name="internal controller keeps at most 10 slots queued"))
     distance, v, a = abs(p.target_x), p.max_speed_hz, p.accel
     ideal_s = distance / v + v / a if distance * a >= v * v else 2 * (distance / a) ** 0.5
-    bound = (ceil(ideal_s * 1000) + 2) * SLOT_NS
+    bound = (ceil(ideal_s * 1000) + 2) * engine.slot_ticks
     run.check(Duration(PulseRef("pokeys.x.step", "first"), PulseRef("pokeys.x.step", "last"), max=bound,
                        name="x move within the continuous trapezoid time + 2 slots"))
     run.figure("ideal_move_ms", ideal_s * 1000, "ms")

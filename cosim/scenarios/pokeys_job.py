@@ -20,7 +20,7 @@ the planned end position and (with ``steppers``) to the stepper's ``commanded_st
 from __future__ import annotations
 
 from cosim.checks import DirectionSetup, IntervalsAbove, MinPulseSpacing, PulsesPerWindow, ValueAt
-from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
+from cosim.controllers.pokeys import AXES, EngineConfig, PulseEngine, uniform_axes
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.couplings.stepper import couple_stepper
@@ -53,9 +53,9 @@ def scenario(run: Run) -> None:
     end = targets[-1]
     for a, axis in enumerate(AXES):
         step, direction = f"pokeys.{axis}.step", f"pokeys.{axis}.dir"
-        run.check(PulsesPerWindow(step, 25, SLOT_NS, name=f"{axis}: at most 25 pulses per 1 ms slot"))
-        run.check(MinPulseSpacing(step, SLOT_NS // 25, name=f"{axis}: pulses at least 40 us apart"))
-        run.check(DirectionSetup(step, direction, config.dir_setup_ns, positive_level=0,
+        run.check(PulsesPerWindow(step, 25, engine.slot_ticks, name=f"{axis}: at most 25 pulses per 1 ms slot"))
+        run.check(MinPulseSpacing(step, run.sim.ticks("40 us"), name=f"{axis}: pulses at least 40 us apart"))
+        run.check(DirectionSetup(step, direction, engine.dir_setup_ticks, positive_level=0,
                                  name=f"{axis}: direction set up {config.dir_setup_ns} ns before each pulse"))
         run.check(ValueAt(step, None, end[a], name=f"{axis}: pulses emitted add up to {end[a]}"))
         run.check(ValueAt(f"pokeys.{axis}.position", None, end[a], name=f"{axis}: position counter = {end[a]}"))
@@ -69,4 +69,4 @@ def scenario(run: Run) -> None:
     if p.steppers:
         run.figure("fmu_steps", lambda: sum(plant.steps for plant in plants))
         run.figure("step_rate_changes", lambda: sum(c.settings for c in couplings))
-    run.figure("job_done_ms", lambda: (host.t_buffer_mode_ns or 0) / 1e6 + len(counts), "ms")
+    run.figure("job_done_ms", lambda: (host.t_buffer_mode or 0) / engine.slot_ticks + len(counts), "ms")

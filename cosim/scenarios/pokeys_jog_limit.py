@@ -15,8 +15,6 @@ from cosim.controllers.pokeys import AxisConfig, EngineConfig, EngineState, Puls
 from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.scenario import Param, Run
 
-MS = 1_000_000
-
 PARAMETERS = (
     Param("jog_hz", 10_000, "Hz", (1, 25_000), "jog speed"),
     Param("limit_at", 2_000, "pulses", (1, 100_000), "x position at which limit+ trips"),
@@ -31,10 +29,10 @@ def scenario(run: Run) -> None:
     engine = PulseEngine(run.sim, EngineConfig(axes=(x, AxisConfig(), AxisConfig())))
     PositionSwitch(run.sim, engine.steps[0], engine.switches.limit_pos[0], lambda pos: pos >= p.limit_at)
     engine.jog(0, p.jog_hz)
-    run.run_until(500 * MS)
+    run.run_until(run.sim.ticks("500 ms"))
     engine.jog(0, 0)  # stop jogging at 500 ms (ramps down)
 
-    run.check(Duration(EdgeRef("pokeys.x.limit_pos", 1), PulseRef("pokeys.x.step", "last"), min=100 * MS,
+    run.check(Duration(EdgeRef("pokeys.x.limit_pos", 1), PulseRef("pokeys.x.step", "last"), min=run.sim.ticks("100 ms"),
                        name="pulses go on more than 100 ms after the limit trips"))
     run.check(IntervalsAbove("pokeys.state", int(EngineState.JOGGING), name="never stopped by the limit (state <= 10)"))
     run.check(ValueAt("pokeys.state", None, 10, name="still jogging"))

@@ -15,7 +15,7 @@ distance past the switch [pulses] and the stop time [us].
 from __future__ import annotations
 
 from cosim.checks import Duration, EdgeRef, PulseRef, ValueAt
-from cosim.controllers.pokeys import SLOT_NS, AxisConfig, EngineConfig, PulseEngine
+from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.couplings.ideal_axis import PositionSwitch
@@ -37,9 +37,10 @@ def scenario(run: Run) -> None:
     HostApp(run.sim, engine, to_entries(plan([Move((4 * p.limit_at, 0, 0))], engine.config.axes)), link="usb")
 
     trip = EdgeRef("pokeys.x.limit_pos", 1, which="first")
-    run.check(Duration(trip, PulseRef("pokeys.x.step", "last"), max=SLOT_NS,
+    run.check(Duration(trip, PulseRef("pokeys.x.step", "last"), max=engine.slot_ticks,
                        name="no pulse after the slot boundary at which the trip is seen"))
-    run.check(Duration(trip, EdgeRef("pokeys.state", 100), max=SLOT_NS, name="state 100 at that slot boundary"))
+    run.check(Duration(trip, EdgeRef("pokeys.state", 100), max=engine.slot_ticks,
+                       name="state 100 at that slot boundary"))
     run.check(ValueAt("pokeys.state", None, 100, name="engine stopped by the limit switch"))
 
     def trip_t() -> int:
@@ -47,4 +48,5 @@ def scenario(run: Run) -> None:
         return int(t[v == 1][0]) if (v == 1).any() else 0
 
     run.figure("stop_distance_pulses", lambda: engine.steps[0].position - p.limit_at, "pulses")
-    run.figure("stop_time_us", lambda: (int(run.sim.trace.pulses("pokeys.x.step")[0][-1]) - trip_t()) / 1e3, "us")
+    us = run.sim.ticks("1 us")
+    run.figure("stop_time_us", lambda: (int(run.sim.trace.pulses("pokeys.x.step")[0][-1]) - trip_t()) / us, "us")

@@ -19,8 +19,6 @@ from cosim.controllers.pokeys import AxisConfig, EngineConfig, EngineState, Puls
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.scenario import Param, Run
 
-MS = 1_000_000
-
 PARAMETERS = (
     Param("fix", "none", "", ("none", "clear", "wait"), "what the host does when it switches to buffer mode"),
     Param("speed_hz", 10_000, "Hz", (1_000, 25_000), "internal speed-control speed (multiple of 1 kHz)"),
@@ -38,13 +36,13 @@ def hazard(run: Run, *, expect_stale: bool) -> None:
     x = AxisConfig(max_speed_hz=25_000, accel=1_000_000, decel=1_000_000)
     engine = PulseEngine(run.sim, EngineConfig(axes=(x, AxisConfig(), AxisConfig())))
     engine.run_at((p.speed_hz, 0, 0))
-    run.run_until(50 * MS + 500_000)
+    run.run_until(run.sim.ticks("50.5 ms"))
     queued = engine.buffer.level
     engine.set_state(EngineState.BUFFER)
     if p.fix == "clear":
         engine.clear_buffer()
     if p.fix == "wait":
-        run.run_until(60 * MS + 500_000)
+        run.run_until(run.sim.ticks("60.5 ms"))
     start = engine.status().positions
     planned = start[0] + 100
     engine.fill_buffer(to_entries(plan([Move((planned, 0, 0))], engine.config.axes, start=start)))

@@ -1,9 +1,9 @@
 """PoKeys host stall: the host freezes for 60 ms while only 20 slots are queued, and the buffer runs empty.
 
 A one-axis move streamed by the host; at ``stall_at_ms`` the host process stalls for ``stall_ms``
-(an OS hiccup). The queued ``prefill`` slots run out, and every slot start in buffer mode that
-finds the buffer empty while the job is not finished is an underrun: no pulses, the axis stops
-dead in the middle of the move::
+(an OS hiccup). The queued ``prefill`` slots run out, and the slot starts in buffer mode that find
+the buffer empty until data comes again are an underrun: no pulses, the axis stops dead in the
+middle of the move::
 
     host          ====|  stalled 60 ms       |=====
     buffer_level  20 \\___________0___________/‾‾‾‾      (20 ms later)
@@ -41,17 +41,18 @@ def stalled_job(run: Run) -> tuple[PulseEngine, HostApp]:
     entries = to_entries(plan([Move((p.distance, 0, 0))], config.axes))
     host = HostApp(run.sim, engine, entries, link=p.link, prefill_slots=p.prefill,
                    stalls=[Stall(p.stall_at_ms * MS, p.stall_ms * MS)])
-    run.figure("underruns", lambda: len(engine.all_underruns))
-    run.figure("underrun_start_ms", lambda: _first(engine.all_underruns).t_start_ns / 1e6, "ms")
-    run.figure("underrun_length_ms", lambda: _first(engine.all_underruns).length_ns / 1e6, "ms")
+    ms = run.sim.ticks("1 ms")
+    run.figure("underruns", lambda: len(engine.underruns))
+    run.figure("underrun_start_ms", lambda: _first(engine.underruns).t_start / ms, "ms")
+    run.figure("underrun_length_ms", lambda: _first(engine.underruns).length / ms, "ms")
     return engine, host
 
 
 def scenario(run: Run) -> None:
     stalled_job(run)
-    run.check(Duration(EdgeRef("pokeys.underrun", 1), EdgeRef("pokeys.underrun", 0), min=MS,
+    run.check(Duration(EdgeRef("pokeys.underrun", 1), EdgeRef("pokeys.underrun", 0), min=run.sim.ticks("1 ms"),
                        name="stall reproduced: the underrun is reported with its start and length"))
 
 
 def _first(underruns: list[Underrun]) -> Underrun:
-    return underruns[0] if underruns else Underrun(0, 0)
+    return underruns[0] if underruns else Underrun(0, 0, 0)

@@ -27,7 +27,7 @@ def scenario(run: Run) -> None:
 
     def lowest_level() -> float:
         t, level = run.sim.trace.edges("pokeys.buffer_level")
-        during = (t > (host.t_buffer_mode_ns or 0)) & (t < (host.t_last_accepted_ns or 0))
+        during = (t > (host.t_buffer_mode or 0)) & (t < (host.t_last_accepted or 0))
         return float(level[during].min()) if during.any() else 0.0
 
     run.figure("lowest_buffer_level_during_job", lowest_level, "slots")

@@ -1,8 +1,10 @@
-"""The 128-slot buffer of 3-byte entries, and the axis-byte encoding.
+"""The 128-slot buffer of slot entries, and the axis-byte encoding.
 
-One slot entry holds one byte per axis (x, y, z). Bits 0..6 of a byte are the pulse count of that
-axis in the slot; the MSB (bit 7) is the direction bit: set means the direction output is
-activated, which is the negative counting direction (``0x85`` = 5 pulses towards negative).
+One slot entry holds one byte per axis (x, y, z on pulse engine v1: 3 bytes; up to 8 axes on v2).
+Bits 0..6 of a byte are the pulse count of that axis in the slot; the MSB (bit 7) is the direction
+bit: set means the direction output is activated, which is the negative counting direction
+(``0x85`` = 5 pulses towards negative). Whether a count is one the device can emit is the
+device model's business (:mod:`.models`), checked by the engine when it takes a fill.
 
 >>> encode_entry((10, -5, 127)).hex()
 '0a857f'
@@ -15,19 +17,12 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Iterable, Sequence
 
-from cosim.controllers.pokeys.limits import (
-    AXES,
-    BUFFER_SLOTS,
-    COUNT_MASK,
-    DIRECTION_BIT,
-    ENTRY_BYTES,
-    check_entry_count,
-    check_int_range,
-)
+from cosim.controllers.pokeys.limits import AXIS_NAMES, BUFFER_SLOTS, COUNT_MASK, DIRECTION_BIT, ENTRY_BYTES
 from cosim.errors import ConfigurationError
+from cosim.validate import integer
 
 Entry = bytes
-"""One slot: ``ENTRY_BYTES`` bytes, x first."""
+"""One slot: one byte per axis, x first."""
 
 
 def encode_axis(count: int, *, negative: bool | None = None, where: str = "") -> int:
@@ -43,7 +38,8 @@ def encode_axis(count: int, *, negative: bool | None = None, where: str = "") ->
     where : str
         Location for the error message.
     """
-    check_entry_count(count, where=where)
+    integer(count, "pulse count", low=-COUNT_MASK, high=COUNT_MASK,
+            allowed=f"-{COUNT_MASK}..{COUNT_MASK} (7-bit count and a direction bit)", where=where)
     neg = count < 0 if count != 0 or negative is None else negative
     return abs(count) | (DIRECTION_BIT if neg else 0)
 
@@ -59,35 +55,38 @@ def signed_count(byte: int) -> int:
 
 
 def encode_entry(counts: Sequence[int], *, negative: Sequence[bool] | None = None, where: str = "") -> Entry:
-    """A 3-byte slot entry from signed counts ``(x, y, z)`` (``negative``: direction bits for zeros)."""
-    if len(counts) != ENTRY_BYTES:
-        raise ConfigurationError.out_of_range("axes in a slot entry", len(counts), str(ENTRY_BYTES), where=where)
-    dirs = negative if negative is not None else (None,) * ENTRY_BYTES
-    return bytes(encode_axis(c, negative=d, where=f"{where}{' ' if where else ''}axis {AXES[i]}")
+    """A slot entry from signed counts ``(x, y, z, ...)`` (``negative``: direction bits for zeros)."""
+    if not 1 <= len(counts) <= len(AXIS_NAMES):
+        raise ConfigurationError.out_of_range("axes in a slot entry", len(counts), f"1..{len(AXIS_NAMES)}",
+                                              where=where)
+    dirs = negative if negative is not None else (None,) * len(counts)
+    return bytes(encode_axis(c, negative=d, where=f"{where}{' ' if where else ''}axis {AXIS_NAMES[i]}")
                  for i, (c, d) in enumerate(zip(counts, dirs, strict=True)))
 
 
 def decode_entry(entry: Entry) -> tuple[int, ...]:
-    """Signed counts ``(x, y, z)`` of a slot entry."""
+    """Signed counts ``(x, y, z, ...)`` of a slot entry."""
     return tuple(signed_count(b) for b in entry)
 
 
-def check_entry(entry: object, *, where: str = "") -> Entry:
-    """Accept a 3-byte entry (bytes-like) or a sequence of 3 signed counts; return the bytes."""
+def check_entry(entry: object, *, axes: int = ENTRY_BYTES, where: str = "") -> Entry:
+    """Accept an entry of ``axes`` bytes (bytes-like) or a sequence of ``axes`` signed counts; return the bytes."""
     if isinstance(entry, bytes | bytearray | memoryview):
         raw = bytes(entry)
-        if len(raw) != ENTRY_BYTES:
-            raise ConfigurationError.out_of_range("slot entry length", len(raw), f"{ENTRY_BYTES} bytes", where=where)
+        if len(raw) != axes:
+            raise ConfigurationError.out_of_range("slot entry length", len(raw), f"{axes} bytes", where=where)
         return raw
     if isinstance(entry, Sequence):
+        if len(entry) != axes:
+            raise ConfigurationError.out_of_range("axes in a slot entry", len(entry), str(axes), where=where)
         return encode_entry(list(entry), where=where)
-    raise ConfigurationError.out_of_range("slot entry", entry, "3 bytes or 3 signed counts", where=where)
+    raise ConfigurationError.out_of_range("slot entry", entry, f"{axes} bytes or {axes} signed counts", where=where)
 
 
-def split_packet(data: bytes, n_slots: int) -> list[Entry]:
-    """The first ``n_slots`` entries of fill-buffer payload bytes (slot-major, x y z per slot)."""
-    check_int_range(n_slots, "number of slots", 0, len(data) // ENTRY_BYTES)
-    return [data[i * ENTRY_BYTES:(i + 1) * ENTRY_BYTES] for i in range(n_slots)]
+def split_packet(data: bytes, n_slots: int, *, axes: int = ENTRY_BYTES) -> list[Entry]:
+    """The first ``n_slots`` entries of fill-buffer payload bytes (slot-major, ``axes`` bytes per slot)."""
+    integer(n_slots, "number of slots", low=0, high=len(data) // axes)
+    return [data[i * axes:(i + 1) * axes] for i in range(n_slots)]
 
 
 class SlotBuffer:
@@ -108,8 +107,9 @@ class SlotBuffer:
     """
 
     def __init__(self, depth_slots: int = BUFFER_SLOTS) -> None:
-        self.depth_slots = check_int_range(depth_slots, "buffer depth", 1, 65535, "slots")
+        self.depth_slots = integer(depth_slots, "buffer depth", low=1, high=65535, unit="slots")
         self._slots: deque[Entry] = deque()
+
     @property
     def level(self) -> int:
         """Queued slots."""

@@ -1,6 +1,9 @@
 """The PoKeys pulse engine as a SimPy process in integer time.
 
-Time is cut into 1 ms slots starting at ``t0_ns``. At every slot start (priority SLOT) the engine
+Time is cut into 1 ms slots starting at ``t0``. Every period is derived once from the
+simulation's resolution (``slot_ticks = sim.ticks(SLOT_NS, "ns")``, likewise the direction set-up
+and the pulse width); a figure that is not a whole number of ticks is refused with the time
+base's error. At every slot start (priority SLOT) the engine
 
 1. reads the switch inputs (:mod:`~cosim.controllers.pokeys.switches`);
 2. stops at once if the enabled emergency input or an enabled limit switch is tripped (limits
@@ -9,7 +12,8 @@ Time is cut into 1 ms slots starting at ``t0_ns``. At every slot start (priority
    (the internal controller produces its slots into the same buffer, ``internal_lookahead_slots``
    ahead), straight from the speed controller when jogging, from the homing sequence when homing -
    and emits them: per axis one pulse-train segment, pulse k at
-   ``slot_start + dir_setup_ns + (k * 1 ms) // count``; the direction output changes at the slot start;
+   ``slot_start + dir_setup + (k * slot) // count`` (floored to the resolution); the direction
+   output changes at the slot start;
 4. adds the slot's counts to the position counters (so the counters always equal the pulses
    committed up to the end of the running slot) and records positions, buffer level, states.
 
@@ -17,45 +21,49 @@ A buffer slot is used in the slot that starts when it is taken. Commands from th
 clear, state changes, moves) act at once on the buffer and the state; the slot that is running
 has already been committed and finishes.
 
-An empty buffer in buffer mode emits no pulses; while a job is marked active
-(:meth:`PulseEngine.mark_job`) such slots are recorded as an underrun.
+A fill with an entry the device model cannot emit (more pulses than its per-slot limit, or the
+reserved x byte 0xFF of pulse engine v1) is refused as a whole: nothing of it is queued, the
+refusal is recorded (:attr:`PulseEngine.refusals`, ``<name>.refused_fills``) and the Python API
+raises :class:`~cosim.errors.ConfigurationError`; the virtual device answers it with 0 accepted.
+
+An empty buffer in buffer mode emits no pulses. Underruns follow one rule
+(:class:`~cosim.controllers.pokeys.records.Underrun`): empty slot starts in buffer mode after a slot
+that took data, ended by a slot start that takes data again in buffer mode.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
+from numbers import Integral
 from typing import Any
 
-from cosim.controllers.pokeys.buffer import SlotBuffer, check_entry, encode_entry
-from cosim.controllers.pokeys.config import SLOTS_PER_S, EngineConfig
+from cosim.controllers.pokeys.buffer import SlotBuffer, check_entry, encode_entry, signed_count
+from cosim.controllers.pokeys.config import EngineConfig, rate_hz
 from cosim.controllers.pokeys.homing import HomingAxis
 from cosim.controllers.pokeys.limits import (
-    AXES,
     BUFFER_SLOTS,
     COUNT_MASK,
     DIRECTION_BIT,
-    MAX_PULSES_PER_SLOT,
     SLOT_NS,
+    SLOTS_PER_S,
     check_axis,
-    check_int_range,
-    check_rate_hz,
-    check_slot_count,
 )
 from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
-from cosim.controllers.pokeys.records import FillReply, Register, Status, Underrun
+from cosim.controllers.pokeys.records import FillReply, Refusal, Register, Status, Underrun
 from cosim.controllers.pokeys.states import AxisState, EngineState
 from cosim.controllers.pokeys.switches import SwitchInputs, SwitchSample
 from cosim.errors import ConfigurationError
 from cosim.kernel import At, Simulation
 from cosim.signals import PulseTrain, Signal, StepDirPort, SwitchPort
 from cosim.timebase import Priority
+from cosim.validate import integer
 
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
 
 
 class PulseEngine:
-    """Three-axis PoKeys pulse engine.
+    """PoKeys pulse engine of any model (:mod:`.models`): 3 axes on the 56 series, up to 8 on the 57CNC.
 
     Parameters
     ----------
@@ -63,11 +71,18 @@ class PulseEngine:
     config : EngineConfig, optional
     name : str
         Device prefix of every signal (``pokeys``).
-    t0_ns : int, optional
-        Start of slot 0 [ns] (default: now).
+    t0 : int, optional
+        Start of slot 0 [ticks] (default: now).
+    pulse_train : callable, optional
+        Class of the step outputs (default :class:`~cosim.signals.PulseTrain`: one segment per
+        slot); called as ``pulse_train(sim, name, pulse_width=..., description=...)``.
 
     Attributes
     ----------
+    axis_names : tuple of str
+        The axes, index 0 first (x, y, z, ...).
+    slot_ticks, dir_setup_ticks, pulse_width_ticks : int
+        Slot length, direction set-up and pulse width [ticks of the simulation's resolution].
     steps : list of PulseTrain
         ``<name>.<axis>.step``: one segment per slot with pulses; a plant subscribes to these.
     dirs : list of Signal
@@ -79,45 +94,55 @@ class PulseEngine:
     switches : SwitchInputs
         The limit, home and emergency inputs.
     underruns : list of Underrun
-        Closed underruns (see :attr:`all_underruns` for one still running).
+        Underruns so far (each recorded when data ends it).
+    refusals : list of Refusal
+        Fill commands refused for an entry the model cannot emit.
     """
 
     def __init__(self, sim: Simulation, config: EngineConfig | None = None, *, name: str = "pokeys",
-                 t0_ns: int | None = None) -> None:
+                 t0: int | None = None, pulse_train: Callable[..., PulseTrain] = PulseTrain) -> None:
         self.sim = sim
-        self.config = config or EngineConfig()
+        self.config = cfg = config or EngineConfig()
+        self.device = cfg.device
         self.name = name
-        self.t0_ns = sim.now if t0_ns is None else sim.timebase.check_ticks(t0_ns, name="t0_ns")
-        cfg = self.config
+        self.t0 = sim.now if t0 is None else sim.timebase.check_ticks(t0, name="t0")
+        self.slot_ticks = sim.ticks(SLOT_NS, "ns", name="slot length (1 ms)")
+        self.pulse_width_ticks = sim.ticks(cfg.pulse_width_ns, "ns", name="pulse_width_ns")
+        self.dir_setup_ticks = sim.ticks(cfg.dir_setup_ns, "ns", name="dir_setup_ns")
+        n = len(cfg.axes)
+        self.axis_names = names = self.device.axis_names
         self.buffer = SlotBuffer(BUFFER_SLOTS)
-        self.steps = [PulseTrain(sim, f"{name}.{a}.step", pulse_width=cfg.pulse_width_ns,
-                                 description=f"step output {a}") for a in AXES]
+        self.steps = [pulse_train(sim, f"{name}.{a}.step", pulse_width=self.pulse_width_ticks,
+                                  description=f"step output {a}") for a in names]
         self.dirs = [Signal(sim, f"{name}.{a}.dir", initial=int(cfg.axes[i].invert_direction),
-                            description=f"direction output {a} (1 = activated)") for i, a in enumerate(AXES)]
+                            description=f"direction output {a} (1 = activated)") for i, a in enumerate(names)]
         self.positions = [Register(sim, f"{name}.{a}.position", unit="pulses", description=f"position counter {a}")
-                          for a in AXES]
+                          for a in names]
         self.axis_state_signals = [Signal(sim, f"{name}.{a}.axis_state", kind="int",
-                                          description=f"axis state {a} (AxisState codes)") for a in AXES]
+                                          description=f"axis state {a} (AxisState codes)") for a in names]
         self.switches = SwitchInputs(sim, cfg, name=name)
         self.state_signal = Signal(sim, f"{name}.state", kind="int", description="engine state (EngineState codes)")
         self.buffer_level = Register(sim, f"{name}.buffer_level", unit="slots",
                                      description="queued slots in the 128-slot buffer")
-        self.underrun = Signal(sim, f"{name}.underrun", description="1 while the buffer runs empty during a job")
+        self.underrun = Register(sim, f"{name}.underrun", unit="", kind="bit",
+                                 description="1 during the empty slots of an underrun (recorded when data ends it)")
+        self.refused_fills = Register(sim, f"{name}.refused_fills", unit="fills",
+                                      description="fill commands refused: an entry the device model cannot emit")
         self.underruns: list[Underrun] = []
+        self.refusals: list[Refusal] = []
         self.slot_index = 0
-        self.job_active = False
-        self._pos = [0, 0, 0]
-        self._dir_bit = [False, False, False]
+        self._pos = [0] * n
+        self._dir_bit = [False] * n
         self._state = EngineState.STOPPED
-        self._axis_states = [AxisState.STOPPED] * 3
+        self._axis_states = [AxisState.STOPPED] * n
         self._sample = SwitchSample(0, 0, 0, False)
-        self._underrun_start: int | None = None
-        self._underrun_slots = 0
-        self._limits = [SlotLimits.exact(a.max_speed_per_slot, a.accel_per_slot2, a.decel_per_slot2)
-                        for a in cfg.axes]
+        self._armed = False  # a buffer-mode slot took data since buffer mode began
+        self._stretch_start: int | None = None
+        self._stretch_slots = 0
+        self._limits = self._slot_limits(cfg)
         self._motions = [AxisMotion(lim) for lim in self._limits]
         self._homing: dict[int, HomingAxis] = {}
-        self._setup = cfg.dir_setup_ns
+        self._over_limit = tuple(b & COUNT_MASK > self.device.max_pulses_per_slot for b in range(256))
         self._emitters = [train.emit for train in self.steps]
         self._pos_setters = [register.set for register in self.positions]
         sim.process(self.pulse_slot())
@@ -133,11 +158,15 @@ class PulseEngine:
         """Free space in the slot buffer (free-space query)."""
         return self.buffer.free
 
+    def axis(self, axis: object, *, where: str = "") -> int:
+        """``axis`` if it is an axis index of this engine (0..2 on a 56E), else ConfigurationError."""
+        return check_axis(axis, where=where, count=len(self.axis_names))
+
     def status(self) -> Status:
-        """Status now: positions, engine state, switch states, axis states."""
+        """Status now: positions, engine state, switch states, axis states, buffer, refusals."""
         s = self._sample
         return Status(tuple(self._pos), self._state, s.limit_pos, s.limit_neg, s.home, s.emergency,
-                      tuple(self._axis_states), self.buffer.free)
+                      tuple(self._axis_states), self.buffer.free, self.buffer.level, len(self.refusals))
 
     def fill_buffer(self, entries: Sequence[object]) -> FillReply:
         """Fill-buffer command: queue as many of ``entries`` as fit, in order.
@@ -145,7 +174,8 @@ class PulseEngine:
         Parameters
         ----------
         entries : sequence
-            Slot entries, each 3 bytes (x, y, z; 7-bit count plus direction bit) or 3 signed counts.
+            Slot entries, each one byte per axis (7-bit count plus direction bit) or one signed
+            count per axis.
 
         Returns
         -------
@@ -155,17 +185,27 @@ class PulseEngine:
         Raises
         ------
         ConfigurationError
-            If an entry has more than 25 pulses on an axis or a count that does not fit 7 bits.
+            If an entry has more pulses on an axis than the model emits per slot (25 on a 56E),
+            holds the reserved x byte 0xFF (pulse engine v1), or does not fit 7 bits. Nothing of
+            the command is queued, and the refusal is recorded (:attr:`refusals`).
         """
+        n = len(self.axis_names)
+        over, reserved, limit = self._over_limit, self.device.reserved_x_byte, self.device.max_pulses_per_slot
         checked: list[bytes] = []
         for i, entry in enumerate(entries):
-            raw = entry if type(entry) is bytes and len(entry) == 3 else check_entry(
-                entry, where=f"fill_buffer slot {i}")
-            if (raw[0] & COUNT_MASK) > MAX_PULSES_PER_SLOT or (raw[1] & COUNT_MASK) > MAX_PULSES_PER_SLOT or (
-                    raw[2] & COUNT_MASK) > MAX_PULSES_PER_SLOT:
-                for a, byte in enumerate(raw):
-                    if byte & COUNT_MASK > MAX_PULSES_PER_SLOT:
-                        check_slot_count(_signed(byte), where=f"fill_buffer slot {i} axis {AXES[a]}")
+            if type(entry) is bytes and len(entry) == n:
+                raw = entry
+            else:
+                if isinstance(entry, Sequence) and not isinstance(entry, bytes | bytearray | str) and len(entry) == n:
+                    for a, count in enumerate(entry):  # a count too large for an axis byte is over every limit
+                        if isinstance(count, Integral) and not isinstance(count, bool) and abs(int(count)) > limit:
+                            self._refuse(i, a, int(count))
+                raw = check_entry(entry, axes=n, where=f"fill_buffer slot {i}")
+            if raw[0] == reserved:
+                self._refuse(i, 0, signed_count(raw[0]), reserved=True)
+            if any(over[b] for b in raw):
+                a = next(a for a, b in enumerate(raw) if over[b])
+                self._refuse(i, a, signed_count(raw[a]))
             checked.append(raw)
         accepted = self.buffer.fill(checked)
         self.buffer_level.set(self.buffer.level)
@@ -195,27 +235,47 @@ class PulseEngine:
             motion.halt()
             motion.reset_position(self._pos[i] + (self._queued(i) if new == EngineState.INTERNAL else 0))
         self._set_state(new)
-        if new != EngineState.BUFFER:
-            self._close_underrun()
 
-    def mark_job(self, active: bool) -> None:
-        """Tell the engine a host job is running (an empty buffer in buffer mode is then an underrun)."""
-        self.job_active = active
-        if not active:
-            self._close_underrun()
+    def reconfigure(self, config: EngineConfig) -> None:
+        """Give the running engine a new configuration (the host changed parameters or switch wiring).
+
+        The model, the number of axes and the pulse width (the step outputs are declared with it)
+        stay as built. The new switch enables, polarity and direction inversion act from now on
+        (an inverted direction output changes at once); the internal controller restarts from rest
+        at its committed position with the new limits, as after a state change; homing in progress
+        keeps the speeds it started with.
+        """
+        if not isinstance(config, EngineConfig):
+            raise ConfigurationError.out_of_range("config", config, "an EngineConfig")
+        old = self.config
+        for field_name in ("model", "pulse_width_ns"):
+            if getattr(config, field_name) != getattr(old, field_name):
+                raise ConfigurationError.out_of_range(
+                    f"reconfigure {field_name}", getattr(config, field_name),
+                    f"{getattr(old, field_name)!r} (fixed when the engine was built)")
+        self.dir_setup_ticks = self.sim.ticks(config.dir_setup_ns, "ns", name="dir_setup_ns")
+        self.config = config
+        self.switches.reconfigure(config)
+        self._limits = self._slot_limits(config)
+        internal = self._state == EngineState.INTERNAL
+        self._motions = [AxisMotion(lim, position=self._pos[a] + (self._queued(a) if internal else 0))
+                         for a, lim in enumerate(self._limits)]
+        for a, axis in enumerate(config.axes):
+            self.dirs[a].set(int(self._dir_bit[a] != axis.invert_direction))
 
     def set_position(self, axis: int, position: int) -> None:
-        """Set the position counter of ``axis`` (0..2) [pulses]."""
-        check_axis(axis, where="set_position")
-        self._pos[axis] = int(position)
+        """Set the position counter of ``axis`` [pulses]."""
+        self.axis(axis, where="set_position")
+        self._pos[axis] = integer(position, "position counter", low=-(2**31), high=2**31 - 1, unit="pulses",
+                                  where="set_position")
         self.positions[axis].set(self._pos[axis])
         self._motions[axis].reset_position(self._pos[axis] + self._queued(axis))
 
     def move_to(self, targets: Sequence[int | None]) -> None:
         """Internal position control: move each axis to its target [pulses] (None: leave it)."""
         def apply(axis: int, value: object) -> None:
-            target = check_int_range(value, "target position", -(2**31), 2**31 - 1, "pulses",
-                                     where=f"move_to axis {AXES[axis]}")
+            target = integer(value, "target position", low=-(2**31), high=2**31 - 1, unit="pulses",
+                             where=f"move_to axis {self.axis_names[axis]}")
             self._motions[axis].move_to(target)
 
         self._internal(targets, "move_to", apply)
@@ -223,7 +283,7 @@ class PulseEngine:
     def run_at(self, speeds_hz: Sequence[int | Fraction | float | None]) -> None:
         """Internal speed control: run each axis at a signed speed [pulses/s] (None: leave it).
 
-        Speeds are limited to the axis' maximum speed; more than 25 kHz is refused.
+        Speeds are limited to the axis' maximum speed; more than the model's maximum is refused.
         """
         def apply(axis: int, value: object) -> None:
             self._motions[axis].run_at(self._clamped_per_slot(axis, value, "run_at"))
@@ -232,47 +292,41 @@ class PulseEngine:
 
     def jog(self, axis: int, speed_hz: int | Fraction | float) -> None:
         """Jogging: run ``axis`` at a signed speed [pulses/s] with the speed controller, limits ignored."""
-        check_axis(axis, where="jog")
+        self.axis(axis, where="jog")
         per_slot = self._clamped_per_slot(axis, speed_hz, "jog")
         if self._state != EngineState.JOGGING:
             self.set_state(EngineState.JOGGING)
         self._motions[axis].run_at(per_slot)
 
-    def start_homing(self, axes: Sequence[int] = (0, 1, 2)) -> None:
-        """Home the given axes (0..2) as the document describes (see :mod:`.homing`)."""
+    def start_homing(self, axes: Sequence[int] | None = None) -> None:
+        """Home the given axes (default: all) as the document describes (see :mod:`.homing`)."""
         if self._state.is_error:
             raise ConfigurationError.out_of_range("engine state for homing", int(self._state),
                                                   "not 100/101 (set state 0 first)")
-        chosen = sorted({check_axis(a, where="start_homing") for a in axes})
-        for a in chosen:
-            if not self.config.axes[a].home_enabled:
-                raise ConfigurationError.out_of_range(f"home switch of axis {AXES[a]} enabled", False, "True",
-                                                      where="start_homing")
-        self.set_state(EngineState.STOPPED)
+        wanted = range(len(self.axis_names)) if axes is None else axes
+        chosen = sorted({self.axis(a, where="start_homing") for a in wanted})
         cfg = self.config
         for a in chosen:
-            vmax = self.config.axes[a].max_speed_per_slot
+            if not cfg.axes[a].home_enabled:
+                raise ConfigurationError.out_of_range(f"home switch of axis {self.axis_names[a]} enabled", False,
+                                                      "True", where="start_homing")
+        self.set_state(EngineState.STOPPED)
+        for a in chosen:
+            vmax = cfg.axes[a].max_speed_per_slot
             self._homing[a] = HomingAxis(vmax * cfg.homing_speed_pct / 100, vmax * cfg.homing_return_pct / 100,
-                                         toward_negative=not cfg.axes[a].invert_homing)
+                                         toward_negative=not cfg.axes[a].invert_homing, reset_at=cfg.homing_reset)
             self._set_axis_state(a, AxisState.HOMING_START)
         self._set_state(EngineState.HOMING)
 
-    @property
-    def all_underruns(self) -> list[Underrun]:
-        """Underruns so far, including one still running (its length up to the current slot's end)."""
-        if self._underrun_start is None:
-            return list(self.underruns)
-        return [*self.underruns, Underrun(self._underrun_start, self._underrun_slots * SLOT_NS)]
-
     # -- ports and the controller protocol -------------------------------------------------------
     def step_dir(self, axis: int) -> StepDirPort:
-        """The step/direction output of ``axis`` (0..2); reversed when its direction is inverted."""
-        check_axis(axis, where="step_dir")
+        """The step/direction output of ``axis`` (0..n-1); reversed when its direction is inverted."""
+        axis = self.axis(axis, where="step_dir")
         return StepDirPort(self.steps[axis], self.dirs[axis], reversed=self.config.axes[axis].invert_direction)
 
     def switch_port(self, axis: int) -> SwitchPort:
-        """The limit and home inputs of ``axis`` (0..2)."""
-        check_axis(axis, where="switch_port")
+        """The limit and home inputs of ``axis`` (0..n-1)."""
+        axis = self.axis(axis, where="switch_port")
         sw = self.switches
         return SwitchPort(limit_pos=sw.limit_pos[axis], limit_neg=sw.limit_neg[axis], home=sw.home[axis])
 
@@ -292,18 +346,18 @@ class PulseEngine:
         Slots in a row with nothing else due in between run without a kernel event each
         (:meth:`~cosim.kernel.Simulation.skip_to`): same instants, same trace.
         """
-        sim, env, t0 = self.sim, self.sim.env, self.t0_ns
+        sim, env, t0, slot = self.sim, self.sim.env, self.t0, self.slot_ticks
         k = 0
         while True:
-            yield At(env, t0 + k * SLOT_NS, Priority.SLOT)
-            self.run_slot(t0 + k * SLOT_NS)
+            yield At(env, t0 + k * slot, Priority.SLOT)
+            self.run_slot(t0 + k * slot)
             k += 1
-            while sim.skip_to(t0 + k * SLOT_NS):
-                self.run_slot(t0 + k * SLOT_NS)
+            while sim.skip_to(t0 + k * slot):
+                self.run_slot(t0 + k * slot)
                 k += 1
 
     def run_slot(self, t: int) -> None:
-        """Everything the engine does at the slot start ``t`` [ns]."""
+        """Everything the engine does at the slot start ``t`` [ticks]."""
         self.slot_index += 1
         self._sample = sample = self.switches.sample()
         if sample.stop_candidate:
@@ -312,12 +366,16 @@ class PulseEngine:
         if state is EngineState.BUFFER or state is EngineState.INTERNAL:
             entry = self.buffer.pop()
             if entry is None:
-                if state is EngineState.BUFFER and self.job_active:
-                    self._note_underrun(t)
+                if state is EngineState.BUFFER and self._armed:
+                    if self._stretch_start is None:
+                        self._stretch_start = t
+                    self._stretch_slots += 1
                 self._idle_axes()
             else:
-                if self._underrun_start is not None:
-                    self._close_underrun()
+                if state is EngineState.BUFFER:
+                    if self._stretch_start is not None:
+                        self._close_underrun(t)
+                    self._armed = True
                 self._emit_entry(t, entry)
             if state is EngineState.INTERNAL:
                 self._produce()
@@ -342,15 +400,15 @@ class PulseEngine:
         self._homing.clear()
         for motion in self._motions:
             motion.halt()
-        self._close_underrun()
-        for a in range(3):
+        for a in range(len(self._axis_states)):
             self._set_axis_state(a, AxisState.LIMIT if a in limit_axes else AxisState.ERROR)
         self._set_state(state)
 
     # -- emitting -----------------------------------------------------------------------------
     def _emit_entry(self, t: int, entry: bytes) -> None:
-        """The buffer path of :meth:`_emit_axis` for all three axes, inlined (it runs every slot)."""
-        states, dir_bit, pos, t_pulse = self._axis_states, self._dir_bit, self._pos, t + self._setup
+        """The buffer path of :meth:`_emit_axis` for every axis, inlined (it runs every slot)."""
+        states, dir_bit, pos = self._axis_states, self._dir_bit, self._pos
+        t_pulse, slot = t + self.dir_setup_ticks, self.slot_ticks
         for a, byte in enumerate(entry):
             negative = byte >= DIRECTION_BIT
             if negative is not dir_bit[a]:
@@ -358,7 +416,7 @@ class PulseEngine:
                 self.dirs[a].set(negative != self.config.axes[a].invert_direction)
             count = byte & COUNT_MASK
             if count:
-                self._emitters[a](t_pulse, SLOT_NS, count, 0 if negative else 1)
+                self._emitters[a](t_pulse, slot, count, 0 if negative else 1)
                 pos[a] += -count if negative else count
                 self._pos_setters[a](pos[a], t)
                 if states[a] is not AxisState.RUNNING:
@@ -378,12 +436,12 @@ class PulseEngine:
             self._dir_bit[a] = negative
             self.dirs[a].set(negative != self.config.axes[a].invert_direction)
         if count:
-            self.steps[a].emit(t + self._setup, SLOT_NS, count, 0 if negative else 1)
+            self._emitters[a](t + self.dir_setup_ticks, self.slot_ticks, count, 0 if negative else 1)
             position = self._pos[a] = self._pos[a] + (-count if negative else count)
             self.positions[a].set(position, t)
 
     def _idle_axes(self) -> None:
-        for a in range(3):
+        for a in range(len(self._axis_states)):
             self._set_axis_state(a, AxisState.READY)
 
     # -- internal controller and homing --------------------------------------------------------
@@ -391,8 +449,10 @@ class PulseEngine:
         if self._state.is_error:
             raise ConfigurationError.out_of_range(f"engine state for {what}", int(self._state),
                                                   "not 100/101 (set state 0 first)")
-        if len(values) != 3:
-            raise ConfigurationError.out_of_range(f"{what} values", len(values), "3 (x, y, z; None to leave)")
+        n = len(self.axis_names)
+        if len(values) != n:
+            raise ConfigurationError.out_of_range(f"{what} values", len(values),
+                                                  f"{n} ({', '.join(self.axis_names)}; None to leave)")
         if self._state != EngineState.INTERNAL:
             self.set_state(EngineState.INTERNAL)
         for a, value in enumerate(values):
@@ -411,13 +471,13 @@ class PulseEngine:
             room -= 1
 
     def _homing_slot(self, t: int, sample: SwitchSample) -> None:
-        counts = [0, 0, 0]
+        counts = [0] * len(self.axis_names)
         for a, homing in self._homing.items():
             count, reset = homing.step(sample.home_tripped(a))
             counts[a] = count
             if reset:
                 self._pos[a] = 0
-                self.positions[a].set(0)
+                self.positions[a].set(0, t)
         self._emit_counts(t, counts, track_states=False)
         for a, homing in self._homing.items():
             self._set_axis_state(a, homing.phase)
@@ -425,19 +485,47 @@ class PulseEngine:
             self._set_state(EngineState.HOME)
 
     def _clamped_per_slot(self, axis: int, speed_hz: object, what: str) -> Fraction:
-        rate = check_rate_hz(speed_hz, "speed_hz", signed=True, where=f"{what} axis {AXES[axis]}")
+        rate = rate_hz(speed_hz, "speed_hz", high=self.device.max_rate_hz, signed=True,
+                       where=f"{what} axis {self.axis_names[axis]}")
         vmax = self.config.axes[axis].max_speed_per_slot
         return max(-vmax, min(vmax, rate / SLOTS_PER_S))
 
     def _queued(self, axis: int) -> int:
-        return sum(_signed(entry[axis]) for entry in self.buffer.peek_all())
+        return sum(signed_count(entry[axis]) for entry in self.buffer.peek_all())
+
+    @staticmethod
+    def _slot_limits(config: EngineConfig) -> list[SlotLimits]:
+        return [SlotLimits.exact(a.max_speed_per_slot, a.accel_per_slot2, a.decel_per_slot2) for a in config.axes]
 
     # -- bookkeeping --------------------------------------------------------------------------
+    def _refuse(self, index: int, axis: int, count: int, *, reserved: bool = False) -> None:
+        """Record the refusal of a fill whose entry ``index`` the model cannot emit on ``axis``, and raise."""
+        device = self.device
+        limit = device.max_pulses_per_slot
+        where = f"fill_buffer slot {index} axis {self.axis_names[axis]}"
+        if reserved:
+            error = ConfigurationError.out_of_range(
+                "x byte", "0xFF", f"a pulse count -{limit}..{limit} (0xFF is the vendor's reserved 'special command' "
+                f"on a PoKeys{device.name})", where=where)
+        else:
+            try:
+                integer(count, "pulses per slot", low=-limit, high=limit,
+                        allowed=f"-{limit}..{limit} ({device.max_rate_hz} Hz at {SLOT_NS} ns slots on a "
+                                f"PoKeys{device.name})", where=where)
+                return
+            except ConfigurationError as exc:
+                error = exc
+        self.refusals.append(Refusal(self.sim.now, index, axis, count, limit, str(error)))
+        self.refused_fills.set(len(self.refusals))
+        raise error
+
     def _set_state(self, state: EngineState) -> None:
         self._state = state
         self.state_signal.set(int(state))
+        if state != EngineState.BUFFER:
+            self._armed, self._stretch_start, self._stretch_slots = False, None, 0
         if state == EngineState.STOPPED:
-            for a in range(3):
+            for a in range(len(self._axis_states)):
                 self._set_axis_state(a, AxisState.STOPPED)
 
     def _set_axis_state(self, axis: int, state: AxisState) -> None:
@@ -445,19 +533,11 @@ class PulseEngine:
             self._axis_states[axis] = state
             self.axis_state_signals[axis].set(int(state))
 
-    def _note_underrun(self, t: int) -> None:
-        if self._underrun_start is None:
-            self._underrun_start = t
-            self._underrun_slots = 0
-            self.underrun.set(1)
-        self._underrun_slots += 1
+    def _close_underrun(self, t: int) -> None:
+        assert self._stretch_start is not None
+        underrun = Underrun(self._stretch_start, t, self._stretch_slots)
+        self.underruns.append(underrun)
+        self.underrun.set(1, underrun.t_start)
+        self.underrun.set(0, t)
+        self._stretch_start, self._stretch_slots = None, 0
 
-    def _close_underrun(self) -> None:
-        if self._underrun_start is not None:
-            self.underruns.append(Underrun(self._underrun_start, self._underrun_slots * SLOT_NS))
-            self._underrun_start = None
-            self.underrun.set(0)
-
-
-def _signed(byte: int) -> int:
-    return -(byte & COUNT_MASK) if byte & DIRECTION_BIT else byte & COUNT_MASK

@@ -1,7 +1,7 @@
 """The host application: keeps the slot buffer filled over a link with delays and stalls.
 
 The host holds the whole job as slot entries (see :mod:`~cosim.controllers.pokeys.planner`) and a
-read pointer. Every ``period_ns`` (cycle k at ``start_ns + k * period_ns``, priority HOST) it
+read pointer. Every ``period_ns`` (cycle k at ``start + k * period``, priority HOST) it
 
 1. waits out an injected stall if the cycle falls inside one (the host process is frozen: an OS
    hiccup, a busy GUI thread);
@@ -12,9 +12,12 @@ read pointer. Every ``period_ns`` (cycle k at ``start_ns + k * period_ns``, prio
 
 Before the job starts the host fills the buffer with up to ``prefill_slots`` slots, then switches
 the engine to buffer mode (one more round trip). Its estimate of the queued slots is
-``slots accepted - slots elapsed since buffer mode began``, from its own clock. The engine is told
-that a job is running (:meth:`PulseEngine.mark_job`) from the start until the device accepts the
-last slot, so an empty buffer in between is recorded as an underrun.
+``slots accepted - slots elapsed since buffer mode began``, from its own clock. An empty buffer
+in the middle of the job is the engine's underrun (:class:`~cosim.controllers.pokeys.records.Underrun`).
+
+Times given in nanoseconds (``period_ns``, ``start_ns``, stalls) are converted once to ticks of
+the simulation's resolution, which refuses a time that is not a whole number of ticks; times the
+host records (:class:`FillRecord`, :attr:`HostApp.t_buffer_mode`) are in ticks.
 """
 
 from __future__ import annotations
@@ -25,21 +28,13 @@ from typing import Any
 
 from cosim.controllers.pokeys.buffer import Entry, check_entry, signed_count
 from cosim.controllers.pokeys.engine import PulseEngine
-from cosim.controllers.pokeys.limits import (
-    AXES,
-    BUFFER_SLOTS,
-    COUNT_MASK,
-    FILL_SLOTS_PER_PACKET,
-    MAX_PULSES_PER_SLOT,
-    SLOT_NS,
-    check_int_range,
-    check_slot_count,
-)
+from cosim.controllers.pokeys.limits import BUFFER_SLOTS, COUNT_MASK, FILL_SLOTS_PER_PACKET, SLOT_NS
 from cosim.controllers.pokeys.link import Link, LinkProfile
 from cosim.controllers.pokeys.states import EngineState
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.timebase import Priority
+from cosim.validate import integer
 
 
 @dataclass(frozen=True)
@@ -50,8 +45,8 @@ class Stall:
     duration_ns: int
 
     def __post_init__(self) -> None:
-        check_int_range(self.t_start_ns, "stall t_start_ns", 0, 2**62, "ns")
-        check_int_range(self.duration_ns, "stall duration_ns", 1, 2**62, "ns")
+        integer(self.t_start_ns, "stall t_start_ns", low=0, high=2**62, unit="ns")
+        integer(self.duration_ns, "stall duration_ns", low=1, high=2**62, unit="ns")
 
     @property
     def t_end_ns(self) -> int:
@@ -61,11 +56,11 @@ class Stall:
 
 @dataclass(frozen=True)
 class FillRecord:
-    """One fill-buffer round trip as the host saw it."""
+    """One fill-buffer round trip as the host saw it: sent, taken by the device, reply back [ticks]."""
 
-    t_send_ns: int
-    t_device_ns: int
-    t_reply_ns: int
+    t_send: int
+    t_device: int
+    t_reply: int
     offered: int
     accepted: int
 
@@ -78,7 +73,7 @@ class HostApp:
     sim : Simulation
     engine : PulseEngine
     entries : sequence
-        The job: slot entries (3 bytes each, or 3 signed counts).
+        The job: slot entries (one byte per engine axis, or one signed count per axis).
     link : {'usb', 'ethernet'} or LinkProfile
         Delay model of the link; delays come from ``sim.rng``.
     period_ns : int
@@ -91,6 +86,13 @@ class HostApp:
         Injected host stalls.
     start_ns : int
         When the host starts [ns].
+
+    Attributes
+    ----------
+    t_buffer_mode : int or None
+        When the host sent "buffer mode" [ticks] (its own clock's origin for the queued-slot estimate).
+    t_last_accepted : int or None
+        When the device accepted the job's last slots [ticks].
     """
 
     def __init__(self, sim: Simulation, engine: PulseEngine, entries: Sequence[object], *,
@@ -99,20 +101,25 @@ class HostApp:
                  start_ns: int = 0) -> None:
         self.sim = sim
         self.engine = engine
-        self.entries: list[Entry] = [_checked(e, i) for i, e in enumerate(entries)]
+        self.entries: list[Entry] = [_checked(engine, e, i) for i, e in enumerate(entries)]
         self.link = Link(sim, link)
-        self.period_ns = check_int_range(period_ns, "period_ns", 1, 10**10, "ns")
-        self.prefill_slots = check_int_range(prefill_slots, "prefill_slots", 1, BUFFER_SLOTS, "slots")
-        self.max_slots_per_fill = check_int_range(max_slots_per_fill, "max_slots_per_fill", 1, BUFFER_SLOTS, "slots")
-        self.stalls = sorted(stalls, key=lambda s: s.t_start_ns)
-        for s in self.stalls:
+        self.period_ns = integer(period_ns, "period_ns", low=1, high=10**10, unit="ns")
+        self.period = sim.ticks(period_ns, "ns", name="period_ns")
+        self.prefill_slots = integer(prefill_slots, "prefill_slots", low=1, high=BUFFER_SLOTS, unit="slots")
+        self.max_slots_per_fill = integer(max_slots_per_fill, "max_slots_per_fill", low=1, high=BUFFER_SLOTS,
+                                          unit="slots")
+        for s in stalls:
             if not isinstance(s, Stall):
                 raise ConfigurationError.out_of_range("stall", s, "Stall(t_start_ns, duration_ns)")
-        self.start_ns = sim.timebase.check_ticks(start_ns, name="start_ns")
+        self.stalls = sorted(stalls, key=lambda s: s.t_start_ns)
+        self._stalls = [(sim.ticks(s.t_start_ns, "ns", name="stall t_start_ns"),
+                         sim.ticks(s.t_end_ns, "ns", name="stall end")) for s in self.stalls]
+        self.start_ns = integer(start_ns, "start_ns", low=0, unit="ns")
+        self.start = sim.ticks(start_ns, "ns", name="start_ns")
         self.read_pointer = 0
         self.fills: list[FillRecord] = []
-        self.t_buffer_mode_ns: int | None = None
-        self.t_last_accepted_ns: int | None = None
+        self.t_buffer_mode: int | None = None
+        self.t_last_accepted: int | None = None
         sim.process(self.refill_buffer())
 
     @property
@@ -121,23 +128,22 @@ class HostApp:
         return self.read_pointer >= len(self.entries)
 
     def stall_end(self, t: int) -> int | None:
-        """End of the stall containing ``t`` [ns], or None."""
-        for s in self.stalls:
-            if s.t_start_ns <= t < s.t_end_ns:
-                return s.t_end_ns
+        """End of the stall containing ``t`` [ticks], or None."""
+        for start, end in self._stalls:
+            if start <= t < end:
+                return end
         return None
 
     def refill_buffer(self) -> Generator[Any, Any, None]:
         """SimPy process: prefill, start buffer mode, then refill every period until the job is sent."""
         sim = self.sim
-        yield sim.at(self.start_ns, Priority.HOST)
-        self.engine.mark_job(True)
+        yield sim.at(self.start, Priority.HOST)
         k = 0
         while not self.finished:
             end = self.stall_end(sim.now)
             if end is not None:
                 yield sim.at(end, Priority.HOST)
-            started = self.t_buffer_mode_ns is not None
+            started = self.t_buffer_mode is not None
             want = self.prefill_slots - self._estimated_level() if started else self.prefill_slots - self.read_pointer
             want = min(want, self.max_slots_per_fill, len(self.entries) - self.read_pointer)
             full = False
@@ -146,12 +152,12 @@ class HostApp:
             if not started and (self.read_pointer >= self.prefill_slots or self.finished or full):
                 yield from self._start_buffer_mode()
                 continue
-            k = max(k + 1, -(-(sim.now - self.start_ns) // self.period_ns))
-            yield sim.at(self.start_ns + k * self.period_ns, Priority.HOST)
+            k = max(k + 1, -(-(sim.now - self.start) // self.period))
+            yield sim.at(self.start + k * self.period, Priority.HOST)
 
     def _estimated_level(self) -> int:
-        assert self.t_buffer_mode_ns is not None
-        elapsed = (self.sim.now - self.t_buffer_mode_ns) // SLOT_NS + 1
+        assert self.t_buffer_mode is not None
+        elapsed = (self.sim.now - self.t_buffer_mode) // self.engine.slot_ticks + 1
         return self.read_pointer - elapsed
 
     def _fill(self, want: int) -> Generator[Any, Any, int]:
@@ -160,12 +166,10 @@ class HostApp:
         t_device = self.sim.now
         offered = self.entries[self.read_pointer:self.read_pointer + want]
         reply = self.engine.fill_buffer(offered)
-        if self.read_pointer + reply.accepted >= len(self.entries):
-            self.engine.mark_job(False)  # the device holds the whole job now
         yield self.sim.after(self.link.delay(), Priority.HOST)
         self.read_pointer += reply.accepted
         if reply.accepted:
-            self.t_last_accepted_ns = t_device
+            self.t_last_accepted = t_device
         self.fills.append(FillRecord(t_send, t_device, self.sim.now, len(offered), reply.accepted))
         return reply.accepted
 
@@ -173,13 +177,17 @@ class HostApp:
         t_send = self.sim.now
         yield self.sim.after(self.link.delay(), Priority.HOST)
         self.engine.set_state(EngineState.BUFFER)
-        self.t_buffer_mode_ns = t_send  # the host's own clock: when it sent the command
+        self.t_buffer_mode = t_send  # the host's own clock: when it sent the command
         yield self.sim.after(self.link.delay(), Priority.HOST)
 
 
-def _checked(entry: object, index: int) -> Entry:
-    raw = check_entry(entry, where=f"host job slot {index}")
+def _checked(engine: PulseEngine, entry: object, index: int) -> Entry:
+    """A job entry the engine's model can emit (the host refuses a job it could never send)."""
+    raw = check_entry(entry, axes=len(engine.axis_names), where=f"host job slot {index}")
+    limit, rate = engine.device.max_pulses_per_slot, engine.device.max_rate_hz
     for a, byte in enumerate(raw):
-        if byte & COUNT_MASK > MAX_PULSES_PER_SLOT:
-            check_slot_count(signed_count(byte), where=f"host job slot {index} axis {AXES[a]}")
+        if byte & COUNT_MASK > limit:
+            integer(signed_count(byte), "pulses per slot", low=-limit, high=limit,
+                    allowed=f"-{limit}..{limit} ({rate} Hz at {SLOT_NS} ns slots)",
+                    where=f"host job slot {index} axis {engine.axis_names[a]}")
     return raw

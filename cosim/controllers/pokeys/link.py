@@ -1,7 +1,9 @@
 """The host-device link: one-way delays with seeded jitter, per profile.
 
-A delay is ``latency_ns + jitter`` with the jitter drawn uniformly from ``0..jitter_ns`` by the
-simulation's random generator (``sim.rng``), so a run is reproducible from its seed.
+A delay is ``latency_ns + jitter`` with the jitter drawn uniformly from ``0..jitter_ns`` whole
+nanoseconds by the simulation's random generator (``sim.rng``), so a run is reproducible from its
+seed; the delay is then floored to the simulation's resolution (the same draws at every
+resolution, so the same physical delays up to one tick).
 
 Profiles (assumptions, not from the vendor document; make your own with :class:`LinkProfile`):
 
@@ -12,10 +14,11 @@ Profiles (assumptions, not from the vendor document; make your own with :class:`
 from __future__ import annotations
 
 from dataclasses import dataclass
+from fractions import Fraction
 
-from cosim.controllers.pokeys.limits import check_int_range
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.validate import integer
 
 
 @dataclass(frozen=True)
@@ -36,8 +39,8 @@ class LinkProfile:
     jitter_ns: int
 
     def __post_init__(self) -> None:
-        check_int_range(self.latency_ns, "latency_ns", 0, 10**10, "ns", where=f"link {self.name}")
-        check_int_range(self.jitter_ns, "jitter_ns", 0, 10**10, "ns", where=f"link {self.name}")
+        integer(self.latency_ns, "latency_ns", low=0, high=10**10, unit="ns", where=f"link {self.name}")
+        integer(self.jitter_ns, "jitter_ns", low=0, high=10**10, unit="ns", where=f"link {self.name}")
 
 
 PROFILES: dict[str, LinkProfile] = {
@@ -65,12 +68,20 @@ class Link:
         self.sim = sim
         self.profile = profile(link)
         self._drawn: list[int] = []
+        self._ns_per_tick: Fraction = sim.timebase.resolution_s * 10**9
 
-    def delay(self) -> int:
-        """One one-way delay [ns]."""
+    def delay_ns(self) -> int:
+        """One one-way delay [ns], drawn from ``sim.rng``."""
         p = self.profile
         if not p.jitter_ns:
             return p.latency_ns
         if not self._drawn:
             self._drawn = (p.latency_ns + self.sim.rng.integers(0, p.jitter_ns + 1, size=self.BATCH)).tolist()[::-1]
         return self._drawn.pop()
+
+    def delay(self) -> int:
+        """One one-way delay [ticks]: :meth:`delay_ns` floored to the simulation's resolution."""
+        ns = self.delay_ns()
+        if self._ns_per_tick == 1:
+            return ns
+        return int(ns // self._ns_per_tick)

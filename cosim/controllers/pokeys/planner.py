@@ -4,9 +4,10 @@ Each :class:`Move` is a straight line from the current position to ``target`` [p
 parametrised by the distance ``s`` along its dominant axis (the one with the most pulses, ``S``);
 axis i is at ``start_i + floor(d_i * s / S)``. ``s`` follows the slot trapezoid of
 :mod:`~cosim.controllers.pokeys.profile` with the path limits that keep every axis within its own
-maximum speed, acceleration and deceleration, so every axis count of a slot is at most 25 and the
-counts of a move add up to its distances exactly (the remainder is carried, never rounded away).
-Moves start and end at rest.
+maximum speed, acceleration and deceleration, so no axis count of a slot exceeds the axis' maximum
+speed (25 pulses at 25 kHz) and the counts of a move add up to its distances exactly (the
+remainder is carried, never rounded away). Moves start and end at rest. A job has as many axes as
+the configurations given (3 for the 56 series, up to 8).
 """
 
 from __future__ import annotations
@@ -16,24 +17,26 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from cosim.controllers.pokeys.buffer import Entry, encode_entry
-from cosim.controllers.pokeys.config import SLOTS_PER_S, AxisConfig
-from cosim.controllers.pokeys.limits import AXES, check_int_range, check_positive, check_rate_hz
+from cosim.controllers.pokeys.config import FASTEST_RATE_HZ, AxisConfig, rate_hz
+from cosim.controllers.pokeys.limits import AXIS_NAMES, SLOTS_PER_S
 from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
 from cosim.errors import ConfigurationError
+from cosim.validate import integer, positive
 
-Counts = tuple[int, int, int]
+Counts = tuple[int, ...]
 
 
 @dataclass(frozen=True)
 class Move:
-    """A straight move to ``target`` (x, y, z) [pulses].
+    """A straight move to ``target`` (x, y, z, ...) [pulses].
 
     Parameters
     ----------
-    target : tuple of 3 int
-        Absolute end position [pulses].
+    target : tuple of int
+        Absolute end position, one per planned axis [pulses].
     speed_hz : number, optional
-        Speed limit of the dominant axis [pulses/s] (default: the axis limits only).
+        Speed limit of the dominant axis [pulses/s] (default: the axis limits only; the axes'
+        maximum speeds bound it in any case).
     accel : number, optional
         Acceleration and deceleration limit of the dominant axis [pulses/s^2] (default: axis limits).
     """
@@ -43,14 +46,14 @@ class Move:
     accel: int | Fraction | float | None = None
 
     def __post_init__(self) -> None:
-        if len(self.target) != len(AXES):
-            raise ConfigurationError.out_of_range("Move target axes", len(self.target), "3 (x, y, z)")
-        for a, value in zip(AXES, self.target, strict=True):
-            check_int_range(value, "Move target", -(2**31), 2**31 - 1, "pulses", where=f"axis {a}")
+        if not 1 <= len(self.target) <= len(AXIS_NAMES):
+            raise ConfigurationError.out_of_range("Move target axes", len(self.target), f"1..{len(AXIS_NAMES)}")
+        for a, value in zip(AXIS_NAMES, self.target, strict=False):
+            integer(value, "Move target", low=-(2**31), high=2**31 - 1, unit="pulses", where=f"axis {a}")
         if self.speed_hz is not None:
-            check_rate_hz(self.speed_hz, "Move speed_hz")
+            rate_hz(self.speed_hz, "Move speed_hz", high=FASTEST_RATE_HZ)
         if self.accel is not None:
-            check_positive(self.accel, "Move accel", "pulses/s^2")
+            positive(self.accel, "Move accel", unit="pulses/s^2")
 
 
 @dataclass(frozen=True)
@@ -60,11 +63,14 @@ class Dwell:
     slots: int
 
     def __post_init__(self) -> None:
-        check_int_range(self.slots, "Dwell slots", 0, 10**9, "slots")
+        integer(self.slots, "Dwell slots", low=0, high=10**9, unit="slots")
 
 
 def plan_move(start: Sequence[int], move: Move, axes: Sequence[AxisConfig]) -> list[Counts]:
     """Per-slot signed counts of one move from ``start`` [pulses]."""
+    if len(move.target) != len(axes):
+        raise ConfigurationError.out_of_range("Move target axes", len(move.target),
+                                              f"{len(axes)} ({', '.join(AXIS_NAMES[:len(axes)])}: the axes planned)")
     deltas = [t - s for t, s in zip(move.target, start, strict=True)]
     dominant = max(abs(d) for d in deltas)
     if dominant == 0:
@@ -73,9 +79,9 @@ def plan_move(start: Sequence[int], move: Move, axes: Sequence[AxisConfig]) -> l
     accel = min(Fraction(axes[i].accel_per_slot2 * dominant, abs(d)) for i, d in enumerate(deltas) if d)
     decel = min(Fraction(axes[i].decel_per_slot2 * dominant, abs(d)) for i, d in enumerate(deltas) if d)
     if move.speed_hz is not None:
-        vmax = min(vmax, check_rate_hz(move.speed_hz, "Move speed_hz") / SLOTS_PER_S)
+        vmax = min(vmax, rate_hz(move.speed_hz, "Move speed_hz", high=FASTEST_RATE_HZ) / SLOTS_PER_S)
     if move.accel is not None:
-        limit = check_positive(move.accel, "Move accel", "pulses/s^2") / SLOTS_PER_S**2
+        limit = positive(move.accel, "Move accel", unit="pulses/s^2") / SLOTS_PER_S**2
         accel, decel = min(accel, limit), min(decel, limit)
     limits = SlotLimits.exact(vmax, accel, decel)
     path = AxisMotion(limits, position=0)
@@ -83,18 +89,18 @@ def plan_move(start: Sequence[int], move: Move, axes: Sequence[AxisConfig]) -> l
     den = dominant * limits.scale
     axes_sd = [(-1 if d < 0 else 1, abs(d)) for d in deltas]  # truncate towards the start: symmetric
     slots: list[Counts] = []
-    before: tuple[int, ...] = (0, 0, 0)
+    before: tuple[int, ...] = (0,) * len(deltas)
     while not path.done:
         path.step()
         now = tuple(sign * (dist * path.p // den) for sign, dist in axes_sd)
-        slots.append((now[0] - before[0], now[1] - before[1], now[2] - before[2]))
+        slots.append(tuple(n - b for n, b in zip(now, before, strict=True)))
         before = now
     return slots
 
 
 def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
-         start: Sequence[int] = (0, 0, 0)) -> list[Counts]:
-    """Per-slot signed counts (x, y, z) of a job: moves and dwells in order.
+         start: Sequence[int] | None = None) -> list[Counts]:
+    """Per-slot signed counts (x, y, z, ...) of a job: moves and dwells in order, from ``start`` (default 0s).
 
     Examples
     --------
@@ -103,11 +109,11 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
     >>> sum(c[0] for c in counts), sum(c[1] for c in counts), counts[-1]
     (100, -50, (0, 0, 0))
     """
-    position = list(start)
+    position = list(start) if start is not None else [0] * len(axes)
     out: list[Counts] = []
     for step in steps:
         if isinstance(step, Dwell):
-            out.extend([(0, 0, 0)] * step.slots)
+            out.extend([(0,) * len(axes)] * step.slots)
         else:
             out.extend(plan_move(position, step, axes))
             position = list(step.target)
@@ -116,9 +122,10 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
 
 def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
     """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit."""
-    negative = [False, False, False]
     entries = []
+    negative: list[bool] = []
     for slot in counts:
+        negative = negative or [False] * len(slot)
         for a, c in enumerate(slot):
             if c:
                 negative[a] = c < 0

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cosim.controllers.pokeys.config import EngineConfig
-from cosim.controllers.pokeys.limits import AXES
+from cosim.controllers.pokeys.limits import AXIS_NAMES
 from cosim.kernel import Simulation
 from cosim.signals import Signal
 
@@ -25,7 +25,7 @@ TRIPPED = 1
 
 @dataclass(frozen=True)
 class SwitchSample:
-    """Tripped states read at one slot start (bitmaps: bit 0 = x, bit 1 = y, bit 2 = z)."""
+    """Tripped states read at one slot start (bitmaps: bit 0 = x, bit 1 = y, bit 2 = z, one bit per axis)."""
 
     limit_pos: int
     limit_neg: int
@@ -63,9 +63,10 @@ class SwitchInputs:
     def __init__(self, sim: Simulation, config: EngineConfig, *, name: str) -> None:
         self.config = config
         nc = "normally closed: 1 = tripped (input high)"
-        self.limit_pos = [Signal(sim, f"{name}.{a}.limit_pos", description=f"limit+ switch {a}, {nc}") for a in AXES]
-        self.limit_neg = [Signal(sim, f"{name}.{a}.limit_neg", description=f"limit- switch {a}, {nc}") for a in AXES]
-        self.home = [Signal(sim, f"{name}.{a}.home", description=f"home switch {a}, {nc}") for a in AXES]
+        names = AXIS_NAMES[:len(config.axes)]
+        self.limit_pos = [Signal(sim, f"{name}.{a}.limit_pos", description=f"limit+ switch {a}, {nc}") for a in names]
+        self.limit_neg = [Signal(sim, f"{name}.{a}.limit_neg", description=f"limit- switch {a}, {nc}") for a in names]
+        self.home = [Signal(sim, f"{name}.{a}.home", description=f"home switch {a}, {nc}") for a in names]
         self.emergency_level = 1 if config.emergency_polarity == 0 else 0
         self.emergency = Signal(sim, f"{name}.emergency", initial=1 - self.emergency_level,
                                 description=f"emergency input, {self.emergency_level} = emergency")
@@ -75,6 +76,21 @@ class SwitchInputs:
 
     def _changed(self, _signal: Signal) -> None:
         self._cached = None
+
+    def reconfigure(self, config: EngineConfig) -> None:
+        """Evaluate the inputs with ``config``'s enables and emergency polarity from now on.
+
+        A polarity change leaves a healthy emergency input healthy: the input stands for a switch
+        wired for the configured polarity, so its level moves to the new healthy level (a plant
+        or script that drives it sets it again).
+        """
+        level = 1 if config.emergency_polarity == 0 else 0
+        healthy = self.emergency.value != self.emergency_level
+        self.config = config
+        self.emergency_level = level
+        self._cached = None
+        if healthy:
+            self.emergency.set(1 - level)
 
     def sample(self) -> SwitchSample:
         """Read every input now (tripped states, whether enabled or not)."""

@@ -1,5 +1,9 @@
 """A PoKeys network client written from the protocol notes (not vendor code): for tests, examples, the bench.
 
+Why here and not in ``tests/``: ``bench/bench_pokeys_device.py`` (a host program beside a running
+server) uses it as much as the tests do, and it is the example host a user can start from; nothing
+in the device package needs it.
+
 It behaves like the library where that matters for a device: 64-byte requests with an 8-bit
 request ID incremented before every send (also re-sends and each part of a large fill), a reply
 accepted only with header 0xAA, the request's ID and a right checksum, re-sends with a new ID when
