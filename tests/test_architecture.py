@@ -160,3 +160,11 @@ def test_every_controller_offers_its_outputs_and_inputs(sim: Simulation) -> None
     assert {"trio.wdog", "trio.axis3.step", "trio.axis3.gate", "trio.axis3.pwm_mark"} <= set(names[1])
     assert names[2] == []  # no motors yet
     assert "pokeys.emergency" in {s.name for s in controllers[0].inputs()}
+
+
+def test_nothing_in_cosim_imports_the_test_helpers_of_cosim_testing() -> None:
+    modules = _modules()
+    assert "cosim.testing" in modules  # the walk sees the package
+    users = [name for name, path in modules.items() if not name.startswith("cosim.testing")
+             for imported in set.union(*_imports(path, modules)) if imported.startswith("cosim.testing")]
+    assert users == []
