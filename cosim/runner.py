@@ -134,7 +134,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     out : path, optional
         Results folder; nothing is written without it.
     progress : bool
-        Show a progress bar for runs that take more than two seconds.
+        Show a progress bar for runs that take more than two seconds (on a terminal only).
 
     Raises
     ------
@@ -195,10 +195,19 @@ def _end_time(sim: Simulation, until: str | int) -> int:
 
 
 def _progress_bar(sim: Simulation, end: int) -> Any:
+    """A bar of simulated time on stderr, only on a terminal and only for runs longer than two seconds.
+
+    Not on a terminal (a pipe, a log file, CI) there is no bar at all: carriage returns would run
+    the bars and the results together. A bar that was shown stays, ending with a newline.
+    """
+    import sys
+
+    if not sys.stderr.isatty():
+        return None
     from tqdm import tqdm
 
     total_ms = sim.timebase.seconds(end) * 1e3
-    bar = tqdm(total=round(total_ms, 3), delay=2.0, unit="ms", desc="simulated", leave=False,
+    bar = tqdm(total=round(total_ms, 3), delay=2.0, unit="ms", desc="simulated", leave=True, file=sys.stderr,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total} ms [{elapsed}<{remaining}]")
 
     def update(now: int) -> None:
