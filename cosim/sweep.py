@@ -314,9 +314,12 @@ def sweep(scenario: str | Path, runs: list[RunSpec], *, workers: int = 2, schedu
     on_row : callable, optional
         Called with each raw row as it arrives (in completion order).
 
-    ``table.attrs`` holds ``wall_time_s``, ``startup_s`` (starting the cluster, part of the wall
-    time), ``legend`` (``c<k>`` -> check name), ``units`` (figure -> unit) and ``swept`` (the
-    parameters that vary).
+    Returns
+    -------
+    pandas.DataFrame
+        One row per run. ``table.attrs`` holds ``wall_time_s`` [s], ``startup_s`` [s] (starting the
+        cluster, part of the wall time), ``legend`` (``c<k>`` -> check name), ``units`` (figure ->
+        unit) and ``swept`` (the parameters that vary).
     """
     import pandas as pd
 
