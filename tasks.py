@@ -116,7 +116,8 @@ def notebooks_job(args: list[str]) -> None:
              "--output-dir", out, *notebooks)
         return
     _say("opening JupyterLab (Ctrl-C to stop)")
-    _run(BIN / "jupyter", "lab", ROOT / "notebooks", *args)
+    as_root = ["--allow-root"] if hasattr(os, "geteuid") and os.geteuid() == 0 else []  # containers, CI
+    _run(BIN / "jupyter", "lab", ROOT / "notebooks", *as_root, *args)
 
 
 def main() -> None:

@@ -162,7 +162,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             result.error_kind = "script"
         finally:
             if bar is not None:
-                bar.close()
+                _close_progress_bar(bar, sim)
             sim.trace.end_t = sim.now
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.now)
@@ -211,10 +211,20 @@ def _progress_bar(sim: Simulation, end: int) -> Any:
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total} ms [{elapsed}<{remaining}]")
 
     def update(now: int) -> None:
-        bar.n = round(sim.timebase.seconds(now) * 1e3, 3)
-        if bar.n > bar.total:  # a scenario that runs on past UNTIL until its job is done
-            bar.total = bar.n
-        bar.refresh()
+        # tqdm.update, not refresh: refresh() draws at once, before the two-second delay, and
+        # close() then believes the bar was never shown and leaves it without its newline.
+        now_ms = round(sim.timebase.seconds(now) * 1e3, 3)
+        if now_ms > bar.total:  # a scenario that runs on past UNTIL until its job is done
+            bar.total = now_ms
+        bar.update(now_ms - bar.n)
 
     sim.env.on_progress = update
     return bar
+
+
+def _close_progress_bar(bar: Any, sim: Simulation) -> None:
+    """Show where the run stopped (the last progress call may be earlier), then close the bar."""
+    update = sim.env.on_progress
+    if update is not None:
+        update(sim.now)
+    bar.close()

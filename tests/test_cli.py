@@ -3,6 +3,7 @@ FMU commands that say what they did, and progress output that suits pipes."""
 
 from __future__ import annotations
 
+import io
 import shutil
 import subprocess
 import sys
@@ -13,6 +14,8 @@ import pytest
 import cosim
 from cosim import fmubuild
 from cosim.cli import COMMANDS, main
+from cosim.kernel import Simulation
+from cosim.runner import _close_progress_bar, _progress_bar
 from cosim.scenario import bundled, description, load
 
 
@@ -132,21 +135,31 @@ def test_platform_folder_is_fmpys() -> None:
     assert (fmubuild.platform_folder(2), fmubuild.platform_folder(3)) == ("linux64", "x86_64-linux")
 
 
-def test_a_progress_bar_only_on_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
-    import io
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
 
-    from cosim.kernel import Simulation
-    from cosim.runner import _progress_bar
 
-    class Terminal(io.StringIO):
-        def isatty(self) -> bool:
-            return True
-
+def test_no_progress_bar_when_stderr_is_not_a_terminal(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(sys, "stderr", io.StringIO())
     with Simulation() as sim:
-        monkeypatch.setattr(sys, "stderr", io.StringIO())
         assert _progress_bar(sim, sim.ticks("1 ms")) is None  # a pipe, a log, CI: no bar at all
-        terminal = Terminal()
-        monkeypatch.setattr(sys, "stderr", terminal)
-        bar = _progress_bar(sim, sim.ticks("1 ms"))
-        assert bar is not None and bar.leave is True  # the bar that was shown ends with a newline
-        bar.close()
+
+
+def test_the_progress_bar_waits_two_seconds_and_ends_with_its_line(monkeypatch: pytest.MonkeyPatch) -> None:
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    with Simulation() as sim:
+        end = sim.ticks("10 ms")
+        bar = _progress_bar(sim, end)
+        assert bar is not None and sim.env.on_progress is not None
+        sim.env.on_progress(sim.ticks("1 ms"))
+        assert terminal.getvalue() == ""  # a short run draws nothing
+        bar.start_t -= 3.0  # as if three seconds of wall time had passed
+        bar.last_print_t -= 3.0
+        sim.env.on_progress(sim.ticks("5 ms"))
+        assert "5.0/10.0 ms" in terminal.getvalue()
+        sim.run(until=end)
+        _close_progress_bar(bar, sim)
+    shown = terminal.getvalue()
+    assert shown.endswith("\n") and "100%" in shown.split("\r")[-1] and "10.0/10.0 ms" in shown.split("\r")[-1]
