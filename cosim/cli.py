@@ -2,78 +2,61 @@
 
 Exit status: 0 when every check passed, 1 when a check failed or a run broke, 2 for usage or
 configuration errors (a parameter out of range, an unknown scenario, a broken script).
+
+Each sub-command is two small functions, ``_args_<name>(parser)`` (its arguments) and
+``cmd_<name>(args) -> exit status``, and one line in :data:`COMMANDS`. Command functions import
+what they need when they run, so that ``cosim --help``, ``cosim list`` and shell completion start
+in a fraction of a second.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
+from cosim import __version__
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
 
 EXIT_PASS, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
+#: How many failing sweep runs are listed with their reason before the rest is only counted.
+SHOWN_FAILURES = 5
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="cosim",
-        description="Co-simulation workbench for motion-controller timing: run scenarios, check timing, "
-                    "build and validate the plant FMUs.",
-        epilog="Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error.",
-    )
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+def _scenario_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """The SCENARIO positional; shell completion offers the bundled names and ``.py`` files."""
+    from cosim.scenario import bundled
 
-    run = sub.add_parser("run", help="run one scenario and check its timing",
-                         description="Run a bundled scenario (by name) or your own script (a .py path), "
-                                     "print the check table and write result.json, trace.vcd and tables.")
-    run.add_argument("scenario", help="bundled scenario name (see `cosim list`) or path to a .py script")
-    run.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
-                     help="set a declared parameter (repeatable; see `cosim params SCENARIO`)")
-    run.add_argument("--out", type=Path, default=None,
-                     help="results folder (default: results/<scenario>)")
-    run.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same trace")
-    run.add_argument("--until", default=None, help="end time with unit, e.g. '20 ms' (default: the scenario's)")
-    run.add_argument("--format", choices=("parquet", "csv"), default="parquet",
-                     help="format of the trace tables (default parquet)")
-    run.add_argument("--no-vcd", action="store_true", help="do not write trace.vcd")
+    action = parser.add_argument("scenario", help=help_text)
+    names = " ".join(bundled())
+    action.complete = {  # type: ignore[attr-defined]  # read by shtab
+        "bash": "_cosim_scenarios",
+        "zsh": f"({names})",
+        "tcsh": f"({names})",
+        "preamble": {"bash": (f'_cosim_scenarios() {{\n  compgen -W "{names}" -- "$1"\n'
+                              '  compgen -f -X "!*.py" -- "$1"\n  compgen -d -- "$1"\n}\n')},
+    }
 
-    sub.add_parser("list", help="list the bundled scenarios")
-    params = sub.add_parser("params", help="show a scenario's parameters (name, default, unit, range, help)")
-    params.add_argument("scenario")
 
-    build = sub.add_parser("build-fmus", help="build the plant FMUs (FMI 2.0 and 3.0) into models/")
-    build.add_argument("models", nargs="*", help="model names (default: all)")
-    build.add_argument("--force", action="store_true", help="rebuild even if up to date")
-    sub.add_parser("check-fmus", help="validate the built FMUs with fmpy's validator")
+def _folder_completion(action: argparse.Action) -> None:
+    action.complete = {"bash": "_shtab_compgen_dirs", "zsh": "_files -/", "tcsh": "d"}  # type: ignore[attr-defined]
 
-    sweep = sub.add_parser(
-        "sweep", help="run a scenario over a parameter grid and/or seeded random samples, on Dask",
-        description="Run SCENARIO for every combination of --grid values, times --samples random draws of the "
-                    "--random parameters. Run i is seeded from (--seed, i) only, so the table is the same with "
-                    "any number of workers. Writes OUT/sweep.parquet (one row per run: parameters, verdict, "
-                    "error, every check figure).",
-        epilog="example: cosim sweep laser_pwm --grid pwm_period=200,1000 --random pwm_on=0:1000 --samples 50")
-    sweep.add_argument("scenario")
-    sweep.add_argument("--grid", action="append", default=[], metavar="NAME=V1,V2,...",
-                       help="values of one parameter (repeatable; all combinations are run)")
-    sweep.add_argument("--random", action="append", default=[], metavar="NAME[=LOW:HIGH]",
-                       help="parameter drawn uniformly per sample (default range: the declared one)")
-    sweep.add_argument("--samples", type=int, default=1, help="random draws per grid point (default 1)")
-    sweep.add_argument("--seed", type=int, default=0, help="sweep seed (default 0)")
-    sweep.add_argument("--workers", type=int, default=2,
-                       help="local Dask worker processes (default 2; 0 runs in this process)")
-    sweep.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler, e.g. tcp://host:8786")
-    sweep.add_argument("--out", type=Path, default=None, help="results folder (default results/sweep-<scenario>)")
 
-    from cosim.pokeys_device.cli import add_parser as add_pokeys_device_parser
+# -- run ------------------------------------------------------------------------------------------
 
-    add_pokeys_device_parser(sub)
-
-    main = sub.add_parser("main", help="the main job: build, run every bundled scenario, summary and report")
-    main.add_argument("--out", type=Path, default=Path("results"), help="results folder (default results/)")
-    return parser
+def _args_run(parser: argparse.ArgumentParser) -> None:
+    _scenario_argument(parser, "bundled scenario name (see `cosim list`) or path to a .py script")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
+                        help="set a declared parameter (repeatable; see `cosim params SCENARIO`)")
+    _folder_completion(parser.add_argument("--out", type=Path, default=None,
+                                           help="results folder (default: results/<scenario>)"))
+    parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same trace")
+    parser.add_argument("--until", default=None, help="end time with unit, e.g. '20 ms' (default: the scenario's)")
+    parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
+                        help="format of the trace tables (default parquet)")
+    parser.add_argument("--no-vcd", action="store_true", help="do not write trace.vcd")
 
 
 def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
@@ -102,14 +85,20 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_PASS if result.verdict == "PASS" else EXIT_FAIL
 
 
+# -- list, params ---------------------------------------------------------------------------------
+
 def cmd_list(args: argparse.Namespace) -> int:
-    from cosim.scenario import bundled, load
+    from cosim.scenario import bundled, description
 
     names = bundled()
     width = max((len(n) for n in names), default=0)
     for name in names:
-        print(f"{name:<{width}}  {load(name).description}")
+        print(f"{name:<{width}}  {description(name)}")
     return EXIT_PASS
+
+
+def _args_params(parser: argparse.ArgumentParser) -> None:
+    _scenario_argument(parser, "bundled scenario name or path to a .py script")
 
 
 def cmd_params(args: argparse.Namespace) -> int:
@@ -125,14 +114,23 @@ def cmd_params(args: argparse.Namespace) -> int:
     return EXIT_PASS
 
 
+# -- FMUs -----------------------------------------------------------------------------------------
+
+def _args_build(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("models", nargs="*", help="model names (default: all)")
+    parser.add_argument("--force", action="store_true", help="rebuild even if up to date")
+
+
 def cmd_build(args: argparse.Namespace) -> int:
     from cosim import fmubuild
 
-    models = args.models or fmubuild.list_models()
-    for model in models:
-        for version in (2, 3):
-            path = fmubuild.build_fmu(model, version) if args.force else fmubuild.ensure_fmu(model, version)
-            print(f"{path}")
+    try:
+        outcomes = fmubuild.build_all(force=args.force, models=args.models or None,
+                                      say=lambda line: print(line, flush=True))
+    except fmubuild.BuildError as exc:
+        print(f"cosim build-fmus: failed: {exc}", file=sys.stderr)
+        return EXIT_FAIL
+    print(fmubuild.summary(outcomes))
     return EXIT_PASS
 
 
@@ -141,16 +139,45 @@ def cmd_check(args: argparse.Namespace) -> int:
 
     from cosim import fmubuild
 
+    models = fmubuild.list_models()
+    if not models:
+        raise ConfigurationError(f"no plant sources in {fmubuild.SOURCE_DIR}: nothing to check "
+                                 "(the installation is incomplete, or COSIM_FMU_SRC points to the wrong place)")
     bad = 0
-    for model in fmubuild.list_models():
-        for version in (2, 3):
-            path = fmubuild.ensure_fmu(model, version)
+    for model in models:
+        for version in fmubuild.FMI_VERSIONS:
+            try:
+                path = fmubuild.ensure_fmu(model, version)
+            except fmubuild.BuildError as exc:
+                print(f"cosim check-fmus: failed: {exc}", file=sys.stderr)
+                return EXIT_FAIL
             problems = validate_fmu(str(path))
-            print(f"{'OK  ' if not problems else 'FAIL'}  {path}")
+            print(f"{'OK  ' if not problems else 'FAIL'}  {path}", flush=True)
             for problem in problems:
                 print(f"      {problem}")
             bad += bool(problems)
+    total = len(models) * len(fmubuild.FMI_VERSIONS)
+    print(f"{total - bad} of {total} FMUs valid (fmpy's validator) in {fmubuild.MODELS_DIR}")
     return EXIT_FAIL if bad else EXIT_PASS
+
+
+# -- sweep ----------------------------------------------------------------------------------------
+
+def _args_sweep(parser: argparse.ArgumentParser) -> None:
+    _scenario_argument(parser, "bundled scenario name or path to a .py script")
+    parser.add_argument("--grid", action="append", default=[], metavar="NAME=V1,V2,...",
+                        help="values of one parameter (repeatable; all combinations are run)")
+    parser.add_argument("--random", action="append", default=[], metavar="NAME[=LOW:HIGH[:STEP]]",
+                        help="parameter drawn per sample (default range: the declared one); integers and "
+                             "times (ms, us, ...) are drawn on their grid (whole numbers, whole ns), or on STEP")
+    parser.add_argument("--samples", type=int, default=1, help="random draws per grid point (default 1)")
+    parser.add_argument("--seed", type=int, default=0, help="sweep seed (default 0)")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="local Dask worker processes (default 2; 0 runs in this process, no start-up cost)")
+    parser.add_argument("--scheduler", default=None, help="address of an existing Dask scheduler, e.g. tcp://host:8786")
+    _folder_completion(parser.add_argument("--out", type=Path, default=None,
+                                           help="results folder (default results/sweep-<scenario>)"))
+    parser.add_argument("--no-report", action="store_true", help="do not write the HTML report sweep.html")
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -161,12 +188,27 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     runs = sweep.plan(args.scenario, grid=sweep.parse_grid(args.grid), random=sweep.parse_random(args.random),
                       samples=args.samples, seed=args.seed)
     out = args.out or Path("results") / f"sweep-{scenario.name}"
-    table = sweep.sweep(args.scenario, runs, workers=args.workers, scheduler=args.scheduler, out=out)
-    verdicts = table["verdict"].value_counts().to_dict()
-    print(f"{len(table)} runs in {table.attrs['wall_time_s']:.1f} s: "
-          + ", ".join(f"{n} {v}" for v, n in sorted(verdicts.items())))
-    print(f"table: {out / 'sweep.parquet'}")
+    table = sweep.sweep(args.scenario, runs, workers=args.workers, scheduler=args.scheduler, out=out,
+                        report=not args.no_report)
+    verdicts = sweep.verdict_counts(table)
+    startup = f", {table.attrs['startup_s']:.1f} s of it starting Dask" if table.attrs["startup_s"] else ""
+    print(f"{len(table)} runs in {table.attrs['wall_time_s']:.1f} s{startup}: "
+          + ", ".join(f"{n} {v}" for v, n in verdicts.items()))
+    for line in sweep.reasons(table, limit=SHOWN_FAILURES):
+        print(f"  {line}")
+    for key, name in table.attrs["legend"].items():
+        print(f"  {key} = {name}")
+    files = "sweep.parquet, sweep.json" + ("" if args.no_report else ", sweep.html (report)")
+    print(f"results in {out}/ ({files})")
     return EXIT_PASS if verdicts.get("ERROR", 0) == 0 else EXIT_FAIL
+
+
+# -- others ---------------------------------------------------------------------------------------
+
+def _pokeys_device_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from cosim.pokeys_device.cli import add_parser
+
+    return add_parser(sub)
 
 
 def cmd_pokeys_device(args: argparse.Namespace) -> int:
@@ -175,22 +217,116 @@ def cmd_pokeys_device(args: argparse.Namespace) -> int:
     return run(args)
 
 
+def _args_main(parser: argparse.ArgumentParser) -> None:
+    _folder_completion(parser.add_argument("--out", type=Path, default=Path("results"),
+                                           help="results folder (default results/)"))
+
+
 def cmd_main(args: argparse.Namespace) -> int:
     from cosim.mainjob import main_job
 
     return main_job(args.out)
 
 
-COMMANDS = {"run": cmd_run, "list": cmd_list, "params": cmd_params, "build-fmus": cmd_build,
-            "check-fmus": cmd_check, "sweep": cmd_sweep,
-            "pokeys-device": cmd_pokeys_device, "main": cmd_main}
+SHELLS = ("bash", "zsh", "tcsh")
+
+
+def _args_completion(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("shell", choices=SHELLS, help="the shell to complete for")
+
+
+def cmd_completion(args: argparse.Namespace) -> int:
+    import shtab
+
+    print(shtab.complete(_parser(), shell=args.shell))
+    return EXIT_PASS
+
+
+# -- the table of commands ------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Command:
+    """One sub-command: its name, what it does, how its arguments are declared and how it runs.
+
+    ``arguments`` adds the arguments to the sub-command's parser; a command whose parser is made
+    elsewhere gives ``parser`` instead (it gets the sub-parsers object and returns the parser).
+    """
+
+    name: str
+    run: Callable[[argparse.Namespace], int]
+    help: str = ""
+    description: str | None = None
+    epilog: str | None = None
+    arguments: Callable[[argparse.ArgumentParser], None] | None = None
+    parser: Callable[[argparse._SubParsersAction], argparse.ArgumentParser] | None = None
+
+
+COMMANDS: tuple[Command, ...] = (
+    Command("run", cmd_run, "run one scenario and check its timing", arguments=_args_run,
+            description="Run a bundled scenario (by name) or your own script (a .py path), print the check "
+                        "table and write result.json, trace.vcd and tables."),
+    Command("list", cmd_list, "list the bundled scenarios with their one-line descriptions"),
+    Command("params", cmd_params, "show a scenario's parameters (name, default, unit, range, help)",
+            arguments=_args_params),
+    Command("build-fmus", cmd_build, "build the plant FMUs (FMI 2.0 and 3.0); says what it built and where",
+            arguments=_args_build,
+            description="Build the plant FMUs that are missing or older than their sources (all with --force). "
+                        "In a source checkout they go to models/; an installed cosim keeps them in a per-user "
+                        "cache. Prints one line per FMU and where they are."),
+    Command("check-fmus", cmd_check, "validate the built FMUs with fmpy's validator (builds missing ones first)"),
+    Command("sweep", cmd_sweep, "run a scenario over a parameter grid and/or seeded random samples, on Dask",
+            arguments=_args_sweep,
+            description="Run SCENARIO for every combination of --grid values, times --samples random draws of "
+                        "the --random parameters. Run i is seeded from (--seed, i) only, so the table is the "
+                        "same with any number of workers. Writes OUT/sweep.parquet (one row per run: "
+                        "parameters, verdict, error, failed checks, check columns c1.*, c2.*, figures fig.*), "
+                        "OUT/sweep.json (the legend of the column names) and OUT/sweep.html (each figure "
+                        "against each swept parameter, coloured by verdict). Prints why runs failed.",
+            epilog="example: cosim sweep laser_pwm --grid pwm_period=200,1000 --random gate_ms=0.5:3 --samples 20"),
+    Command("pokeys-device", cmd_pokeys_device, parser=_pokeys_device_parser),
+    Command("main", cmd_main, "the main job: build, run every bundled scenario, summary and report",
+            arguments=_args_main),
+    Command("completion", cmd_completion, "print a shell completion script (bash, zsh, tcsh)",
+            arguments=_args_completion,
+            description="Print a completion script for SHELL. Install it, for example, with\n"
+                        "  cosim completion bash > ~/.local/share/bash-completion/completions/cosim\n"
+                        "  cosim completion zsh > ~/.zfunc/_cosim   (with fpath+=~/.zfunc before compinit)",
+            epilog=None),
+)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="cosim",
+        description="Co-simulation workbench for motion-controller timing: run scenarios, check timing, "
+                    "sweep parameters, build and validate the plant FMUs.",
+        epilog="Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error.",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for command in COMMANDS:
+        if command.parser is not None:
+            command.parser(sub)
+            continue
+        formatter = argparse.RawDescriptionHelpFormatter if command.name == "completion" else argparse.HelpFormatter
+        child = sub.add_parser(command.name, help=command.help, description=command.description or command.help,
+                               epilog=command.epilog, formatter_class=formatter)
+        if command.arguments is not None:
+            command.arguments(child)
+    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``cosim`` command."""
+    """Entry point of the ``cosim`` command (and of ``python -m cosim``)."""
     args = _parser().parse_args(argv)
+    run = {c.name: c.run for c in COMMANDS}[args.command]
     try:
-        return COMMANDS[args.command](args)
+        return run(args)
+    except BrokenPipeError:  # `cosim list | head`: the reader has what it wanted
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        return EXIT_PASS
     except (ConfigurationError, ScenarioError) as exc:
         print(f"cosim {args.command}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE

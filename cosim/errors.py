@@ -16,10 +16,7 @@ class CosimError(Exception):
 class ConfigurationError(CosimError, ValueError):
     """A parameter, a scenario or a setup value is not acceptable.
 
-    Parameters
-    ----------
-    message : str
-        Full text; prefer :meth:`out_of_range` for the common case.
+    Raised with the full message text; prefer :meth:`out_of_range` for the common case.
     """
 
     @classmethod

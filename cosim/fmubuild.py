@@ -4,8 +4,18 @@ For each plant (a folder of ``fmu_src/`` with a ``model.toml``) and each FMI ver
 FMU folder (model description, ``sources/`` with every file needed to rebuild, documentation),
 compiles the platform binary with :func:`fmpy.build.build_platform_binary` (CMake; all warnings on
 and turned into errors), checks that the binary exports the plain FMI function names, and zips it
-to ``models/fmi2/<Model>.fmu`` or ``models/fmi3/<Model>.fmu``. The FMI headers come from the
+to ``<models>/fmi2/<Model>.fmu`` or ``<models>/fmi3/<Model>.fmu``. The FMI headers come from the
 installed fmpy package. :func:`ensure_fmu` rebuilds an FMU that is missing or older than its sources.
+
+Where things are:
+
+* plant sources (``SOURCE_DIR``): ``fmu_src/`` of a source checkout; in an installed wheel,
+  ``cosim/_data/fmu_src/`` inside the package;
+* built FMUs (``MODELS_DIR``): ``models/`` of a source checkout; for an installed cosim, a per-user
+  cache found with ``platformdirs`` (for example ``~/.cache/cosim/<version>/models`` on Linux),
+
+so an installed cosim never writes into its (possibly read-only) package folder. The environment
+variables ``COSIM_FMU_SRC`` and ``COSIM_MODELS`` override either place.
 
 Run ``python -m cosim.fmubuild`` (or ``cosim build-fmus``) to build what is missing or stale.
 """
@@ -15,26 +25,45 @@ from __future__ import annotations
 import argparse
 import contextlib
 import ctypes
-import fcntl
 import os
 import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import zipfile
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
-from cosim import fmudesc
+from cosim import __version__, fmudesc
 from cosim.errors import ConfigurationError
 
-ROOT = Path(__file__).resolve().parents[1]
-#: Where the plant sources are: ``fmu_src/`` of the checkout (override with ``COSIM_FMU_SRC``).
-SOURCE_DIR = Path(os.environ.get("COSIM_FMU_SRC", ROOT / "fmu_src"))
-#: Where built FMUs go: ``models/`` of the checkout (override with ``COSIM_MODELS``).
-MODELS_DIR = Path(os.environ.get("COSIM_MODELS", ROOT / "models"))
+PACKAGE_DIR = Path(__file__).resolve().parent
+#: The source checkout cosim runs from (it has ``pyproject.toml`` and ``fmu_src/``), or None when installed.
+CHECKOUT: Path | None = (PACKAGE_DIR.parent if (PACKAGE_DIR.parent / "pyproject.toml").is_file()
+                         and (PACKAGE_DIR.parent / "fmu_src").is_dir() else None)
+#: Data folders the wheel carries inside the package (see ``[tool.hatch.build.targets.wheel.sources]``).
+BUNDLED_DIR = PACKAGE_DIR / "_data"
+
+
+def data_dir(in_checkout: str, in_wheel: str) -> Path:
+    """A data folder shipped with cosim: ``in_checkout`` of the source checkout, else ``_data/in_wheel``."""
+    return CHECKOUT / in_checkout if CHECKOUT is not None else BUNDLED_DIR / in_wheel
+
+
+def _cache_dir() -> Path:
+    """Per-user cache for FMUs built by an installed cosim (one folder per cosim version)."""
+    from platformdirs import user_cache_path
+
+    return user_cache_path("cosim", appauthor=False, version=__version__) / "models"
+
+
+#: Where the plant sources are (override with ``COSIM_FMU_SRC``).
+SOURCE_DIR = Path(os.environ.get("COSIM_FMU_SRC") or data_dir("fmu_src", "fmu_src"))
+#: Where built FMUs go: ``models/`` of the checkout, else the per-user cache (override with ``COSIM_MODELS``).
+MODELS_DIR = Path(os.environ.get("COSIM_MODELS") or (CHECKOUT / "models" if CHECKOUT is not None else _cache_dir()))
 FMI_VERSIONS = (2, 3)
-_PLATFORM_DIR = {2: "linux64", 3: "x86_64-linux"}
 _EXPORTS = {2: ("fmi2Instantiate", "fmi2DoStep", "fmi2GetReal", "fmi2SetBoolean", "fmi2FreeInstance"),
             3: ("fmi3InstantiateCoSimulation", "fmi3DoStep", "fmi3GetFloat64", "fmi3SetBoolean",
                 "fmi3UpdateDiscreteStates", "fmi3FreeInstance")}
@@ -95,24 +124,35 @@ def is_stale(model: str, fmi_version: int = 3) -> bool:
 
 @contextlib.contextmanager
 def _lock() -> Iterator[None]:
-    """One build at a time across processes (test runs, scenario runs, a sweep's workers)."""
+    """One build at a time across processes (test runs, scenario runs, a sweep's workers), on any OS."""
+    from filelock import FileLock
+
     MODELS_DIR.mkdir(parents=True, exist_ok=True)
-    with open(MODELS_DIR / ".build.lock", "w") as handle:
-        fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(handle, fcntl.LOCK_UN)
+    with FileLock(MODELS_DIR / ".build.lock"):
+        yield
 
 
 def ensure_fmu(model: str, fmi_version: int = 3) -> Path:
-    """The FMU of ``model``, built first if it is missing or older than its sources."""
+    """The FMU of ``model``, built first if it is missing or older than its sources.
+
+    A build (the first use after installing, or after a source changed) says so on stderr, since it
+    takes a few seconds.
+    """
     _check_version(fmi_version)
     if is_stale(model, fmi_version):
         with _lock():
             if is_stale(model, fmi_version):
+                print(f"cosim: building {model} (FMI {fmi_version}.0) into {fmu_path(model, fmi_version)}",
+                      file=sys.stderr, flush=True)
                 build_fmu(model, fmi_version)
     return fmu_path(model, fmi_version)
+
+
+def platform_folder(fmi_version: int) -> str:
+    """The ``binaries/`` sub-folder for this machine, as fmpy names it (``linux64``, ``x86_64-linux``, ...)."""
+    import fmpy
+
+    return str(fmpy.platform_tuple if fmi_version == 3 else fmpy.platform)
 
 
 def stage(model: str, fmi_version: int, folder: Path) -> fmudesc.ModelSpec:
@@ -144,7 +184,7 @@ def compile_binary(unzipdir: Path, *, build_dir: Path | None = None) -> Path:
     Warnings are errors. Returns the shared library. Raises :class:`BuildError` with the
     compiler output on failure.
     """
-    from fmpy import read_model_description
+    from fmpy import read_model_description, sharedLibraryExtension
     from fmpy.build import build_platform_binary
 
     md = read_model_description(str(unzipdir))
@@ -165,7 +205,7 @@ def compile_binary(unzipdir: Path, *, build_dir: Path | None = None) -> Path:
                 out.flush()
                 raise BuildError(f"building {identifier} (FMI {fmi_version}.0) failed: {exc}\n"
                                  f"{_tail(log.read_text())}") from exc
-    library = unzipdir / "binaries" / _PLATFORM_DIR[fmi_version] / f"{identifier}.so"
+    library = unzipdir / "binaries" / platform_folder(fmi_version) / f"{identifier}{sharedLibraryExtension}"
     if not library.exists():
         raise BuildError(f"the build of {identifier} produced no {library}")
     check_exports(library, fmi_version)
@@ -227,37 +267,77 @@ def _zip(folder: Path, target: Path) -> None:
             zf.writestr(info, path.read_bytes())
 
 
-def build_all(*, force: bool = False, models: list[str] | None = None, quiet: bool = False) -> list[Path]:
-    """Build every plant for FMI 2.0 and 3.0 (only what is missing or stale unless ``force``)."""
-    built = []
-    for model in models or list_models():
+@dataclass(frozen=True)
+class BuildOutcome:
+    """What :func:`build_all` did for one FMU."""
+
+    model: str
+    fmi_version: int
+    path: Path
+    built: bool
+    seconds: float
+
+    def line(self) -> str:
+        """One line for the terminal: ``built ... (4.1 s)`` or ``up to date ...``."""
+        what = f"{self.model} FMI {self.fmi_version}.0"
+        return (f"built       {what:<18} {self.path}  ({self.seconds:.1f} s)" if self.built
+                else f"up to date  {what:<18} {self.path}")
+
+
+def build_all(*, force: bool = False, models: list[str] | None = None,
+              say: Callable[[str], None] | None = None) -> list[BuildOutcome]:
+    """Build every plant (or ``models``) for FMI 2.0 and 3.0: what is missing or stale, or all if ``force``.
+
+    ``say`` gets one line per FMU as it is done. Raises :class:`~cosim.errors.ConfigurationError`
+    when there are no plant sources at all (a broken install) or a model name is unknown.
+    """
+    names = models or list_models()
+    if not names:
+        raise ConfigurationError(f"no plant sources in {SOURCE_DIR} (folders with a model.toml): "
+                                 "the installation is incomplete, or COSIM_FMU_SRC points to the wrong place")
+    for model in names:
+        _model_dir(model)
+    outcomes = []
+    for model in names:
         for version in FMI_VERSIONS:
-            if force or is_stale(model, version):
-                if not quiet:
-                    print(f"building {fmu_path(model, version).relative_to(MODELS_DIR.parent)}", flush=True)
-                with _lock():
-                    built.append(build_fmu(model, version))
-    return built
+            started = time.perf_counter()
+            with _lock():
+                built = force or is_stale(model, version)
+                path = build_fmu(model, version) if built else fmu_path(model, version)
+            outcome = BuildOutcome(model, version, path, built, time.perf_counter() - started)
+            if say is not None:
+                say(outcome.line())
+            outcomes.append(outcome)
+    return outcomes
+
+
+def summary(outcomes: list[BuildOutcome]) -> str:
+    """``N built, M up to date in MODELS_DIR (sources: SOURCE_DIR)``."""
+    built = sum(o.built for o in outcomes)
+    return f"{built} built, {len(outcomes) - built} up to date in {MODELS_DIR} (sources: {SOURCE_DIR})"
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m cosim.fmubuild",
-        description="Build the plant FMUs (FMI 2.0 and 3.0) from fmu_src/ into models/fmi2 and models/fmi3. "
+        description=f"Build the plant FMUs (FMI 2.0 and 3.0) from {SOURCE_DIR} into {MODELS_DIR}/fmi2 and fmi3. "
                     "Only FMUs that are missing or older than their sources are rebuilt.")
     parser.add_argument("models", nargs="*", metavar="MODEL", help=f"plants to build (default: all of "
-                        f"{', '.join(list_models()) or 'fmu_src/'})")
+                        f"{', '.join(list_models()) or SOURCE_DIR})")
     parser.add_argument("--force", action="store_true", help="rebuild even if up to date")
+    parser.add_argument("--quiet", action="store_true", help="print only what was built")
     args = parser.parse_args(argv)
+
+    def say(line: str) -> None:
+        if not (args.quiet and line.startswith("up to date")):
+            print(line, flush=True)
+
     try:
-        for model in args.models:
-            _model_dir(model)
-        built = build_all(force=args.force, models=args.models or None)
+        outcomes = build_all(force=args.force, models=args.models or None, say=say)
     except (ConfigurationError, BuildError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
-    if not built:
-        print(f"FMUs up to date in {MODELS_DIR}")
+    print(summary(outcomes))
     return 0
 
 

@@ -1,5 +1,8 @@
 """Parameter presets of real devices, kept as TOML files in ``models/presets/``.
 
+An installed cosim carries the same files inside the package (``cosim/_data/presets/``); ``PRESETS``
+is whichever of the two this copy of cosim has (see :func:`cosim.fmubuild.data_dir`).
+
 A preset file names the model it is for, cites its sources, and lists FMU parameter values in
 SI units::
 
@@ -17,12 +20,14 @@ from pathlib import Path
 from typing import Any
 
 from cosim.errors import ConfigurationError
+from cosim.fmubuild import data_dir
 
-PRESETS = Path(__file__).resolve().parent.parent / "models" / "presets"
+#: The preset folder: ``models/presets`` of the source checkout, or the copy inside the installed package.
+PRESETS: Path = data_dir("models/presets", "presets")
 
 
 def available() -> list[str]:
-    """Names of the presets in ``models/presets``."""
+    """Names of the presets in :data:`PRESETS`."""
     return sorted(p.stem for p in PRESETS.glob("*.toml"))
 
 

@@ -135,7 +135,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     out : path, optional
         Results folder; nothing is written without it.
     progress : bool
-        Show a progress bar for runs that take more than two seconds.
+        Show a progress bar for runs that take more than two seconds (on a terminal only).
 
     Raises
     ------
@@ -163,7 +163,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             result.error_kind = "script"
         finally:
             if bar is not None:
-                bar.close()
+                _close_progress_bar(bar, sim)
             sim.trace.end_t = sim.now
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.now)
@@ -196,17 +196,36 @@ def _end_time(sim: Simulation, until: str | int) -> int:
 
 
 def _progress_bar(sim: Simulation, end: int) -> Any:
+    """A bar of simulated time on stderr, only on a terminal and only for runs longer than two seconds.
+
+    Not on a terminal (a pipe, a log file, CI) there is no bar at all: carriage returns would run
+    the bars and the results together. A bar that was shown stays, ending with a newline.
+    """
+    import sys
+
+    if not sys.stderr.isatty():
+        return None
     from tqdm import tqdm
 
     total_ms = sim.timebase.seconds(end) * 1e3
-    bar = tqdm(total=round(total_ms, 3), delay=2.0, unit="ms", desc="simulated", leave=False,
+    bar = tqdm(total=round(total_ms, 3), delay=2.0, unit="ms", desc="simulated", leave=True, file=sys.stderr,
                bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.1f}/{total} ms [{elapsed}<{remaining}]")
 
     def update(now: int) -> None:
-        bar.n = round(sim.timebase.seconds(now) * 1e3, 3)
-        if bar.n > bar.total:  # a scenario that runs on past UNTIL until its job is done
-            bar.total = bar.n
-        bar.refresh()
+        # tqdm.update, not refresh: refresh() draws at once, before the two-second delay, and
+        # close() then believes the bar was never shown and leaves it without its newline.
+        now_ms = round(sim.timebase.seconds(now) * 1e3, 3)
+        if now_ms > bar.total:  # a scenario that runs on past UNTIL until its job is done
+            bar.total = now_ms
+        bar.update(now_ms - bar.n)
 
     sim.env.on_progress = update
     return bar
+
+
+def _close_progress_bar(bar: Any, sim: Simulation) -> None:
+    """Show where the run stopped (the last progress call may be earlier), then close the bar."""
+    update = sim.env.on_progress
+    if update is not None:
+        update(sim.now)
+    bar.close()

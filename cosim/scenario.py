@@ -2,7 +2,8 @@
 
 A scenario is a Python file (bundled ones live in :mod:`cosim.scenarios`) with
 
-* a module docstring (first line = the one-line description shown by ``cosim list``),
+* a module docstring (first line = the one-line description shown by ``cosim list``, which reads
+  it without running the file: see :func:`description`),
 * ``PARAMETERS``: a tuple of :class:`Param` (name, default, unit, allowed range, help),
 * ``UNTIL``: default end time (a string with a unit or ticks),
 * ``def scenario(run: Run) -> None``: create plants and controllers, connect signals, declare
@@ -24,20 +25,27 @@ Example (ten lines)::
 
 from __future__ import annotations
 
+import ast
 import sys
 import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from cosim.errors import ConfigurationError, ScenarioError
-from cosim.fmu import Value
-from cosim.kernel import Simulation
-from cosim.master import Plant
+
+if TYPE_CHECKING:  # imported where used, so that `cosim list` and `cosim params` need no fmpy
+    from cosim.fmu import Value
+    from cosim.kernel import Simulation
+    from cosim.master import Plant
 
 BUNDLED = Path(__file__).resolve().parent / "scenarios"
+
+#: How a parameter's type is named in messages ("is not an integer").
+_KIND_NAMES = {bool: "a flag (true/false, on/off, yes/no, 1/0)", int: "an integer", float: "a number",
+               str: "a string"}
 
 
 @dataclass(frozen=True)
@@ -93,7 +101,8 @@ class Param:
                 value = str(text)
         except ValueError:
             raise ConfigurationError(
-                f"parameter {self.name} = {text!r} is not a {kind.__name__} (allowed: {self.allowed()})"
+                f"parameter {self.name} = {text!r} is not {_KIND_NAMES.get(kind, kind.__name__)} "
+                f"(allowed: {self.allowed()})"
             ) from None
         if self.range is not None:
             ok = value in self.range if isinstance(self.default, str) else (
@@ -152,6 +161,8 @@ class Run:
     def plant(self, model: str | Path, *, name: str, fmi_version: int = 3, preset: str | None = None,
               parameters: Mapping[str, Value] | None = None) -> Plant:
         """Add a plant FMU (bundled model name or ``.fmu`` path), optionally from a preset."""
+        from cosim.master import Plant
+
         values: dict[str, Value] = {}
         if preset is not None:
             from cosim.presets import load_preset
@@ -205,6 +216,21 @@ def bundled() -> list[str]:
     return sorted(p.stem for p in BUNDLED.glob("*.py") if not p.stem.startswith("_"))
 
 
+def description(name_or_path: str | Path) -> str:
+    """The one-line description of a scenario (first line of its docstring), without running it.
+
+    The file is parsed, not imported, so listing scenarios costs milliseconds and needs neither
+    fmpy nor the controllers. A file that does not parse gets an empty description (``cosim run``
+    reports the syntax error with its line).
+    """
+    path = _path(name_or_path)
+    try:
+        doc = ast.get_docstring(ast.parse(path.read_text(), str(path))) or ""
+    except SyntaxError:
+        return ""
+    return doc.strip().splitlines()[0] if doc.strip() else ""
+
+
 def load(name_or_path: str | Path) -> ScenarioFile:
     """Load a bundled scenario by name or a scenario script by path.
 
@@ -215,16 +241,7 @@ def load(name_or_path: str | Path) -> ScenarioFile:
     ConfigurationError
         If no such scenario exists.
     """
-    path = Path(name_or_path)
-    if path.suffix != ".py":
-        path = BUNDLED / f"{name_or_path}.py"
-        if not path.exists():
-            raise ConfigurationError(
-                f"no bundled scenario named {name_or_path!r} (bundled: {', '.join(bundled())}); "
-                "give a path to a .py file for your own"
-            )
-    if not path.exists():
-        raise ConfigurationError(f"scenario file {path} does not exist")
+    path = _path(name_or_path)
     module = _import(path)
     function = getattr(module, "scenario", None)
     if not callable(function):
@@ -237,6 +254,21 @@ def load(name_or_path: str | Path) -> ScenarioFile:
         p.parse(p.default)
     return ScenarioFile(name=path.stem, path=path.resolve(), description=doc.splitlines()[0] if doc else "",
                         parameters=params, until=getattr(module, "UNTIL", "10 ms"), function=function)
+
+
+def _path(name_or_path: str | Path) -> Path:
+    """The file of a bundled scenario name or a script path; ConfigurationError if there is none."""
+    path = Path(name_or_path)
+    if path.suffix != ".py":
+        path = BUNDLED / f"{name_or_path}.py"
+        if not path.exists():
+            raise ConfigurationError(
+                f"no bundled scenario named {name_or_path!r} (bundled: {', '.join(bundled())}); "
+                "give a path to a .py file for your own"
+            )
+    if not path.exists():
+        raise ConfigurationError(f"scenario file {path} does not exist")
+    return path
 
 
 def _import(path: Path) -> ModuleType:

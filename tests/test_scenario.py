@@ -76,10 +76,11 @@ def _script(tmp_path: Path, text: str, name: str = "blink.py") -> Path:
         (Param("on", False), "on", True),
         (Param("mode", "usb", "", ("usb", "ethernet")), "ethernet", "ethernet"),
         (Param("n", 3, "", (1, 10)), "11", r"parameter n = 11 is not allowed \(allowed: 1..10\)"),
-        (Param("n", 3, "", (1, 10)), "2.5", r"parameter n = '2.5' is not a int"),
+        (Param("n", 3, "", (1, 10)), "2.5", r"parameter n = '2.5' is not an integer \(allowed: 1..10\)"),
+        (Param("x", 1.0, "W", (0.0, 5.0)), "lots", r"parameter x = 'lots' is not a number \(allowed"),
         (Param("x", 1.0, "W", (0.0, 5.0)), "9", r"parameter x = 9.0 is not allowed \(allowed: 0.0..5.0 W\)"),
         (Param("mode", "usb", "", ("usb", "ethernet")), "can", r"allowed: usb, ethernet"),
-        (Param("on", False), "maybe", r"parameter on = 'maybe' is not a bool"),
+        (Param("on", False), "maybe", r"parameter on = 'maybe' is not a flag \(true/false, on/off"),
     ],
 )
 def test_param_parse_table(param: Param, text: str, expected: object) -> None:

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import json
+from decimal import Decimal
+from fractions import Fraction
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
+from cosim.cli import main
 from cosim.errors import ConfigurationError
 from cosim.sweep import parse_grid, parse_random, plan, sweep
 
@@ -72,3 +76,109 @@ def test_same_table_with_one_and_two_workers(tmp_path: Path) -> None:
     pd.testing.assert_frame_equal(one, two)
     assert len(one) == 6 and set(one["verdict"]) == {"PASS"}
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "sweep.parquet"), two)
+
+
+TIMED = '''"""A gate of gate_ms, checked against a limit; fails with a reason for x = 3."""
+from types import SimpleNamespace
+
+from cosim.scenario import Param
+PARAMETERS = (Param("gate_ms", 1.0, "ms", (0.001, 10.0), "gate time"), Param("x", 1, "", (0, 5), "a count"),
+              Param("level", 0.5, "V", (0.0, 1.0), "a level"))
+UNTIL = "1 us"
+
+
+class AtMost:
+    def __init__(self, value, limit):
+        self.value, self.limit = value, limit
+
+    def evaluate(self, trace):
+        ok = self.value <= self.limit
+        return SimpleNamespace(to_dict=lambda: {
+            "name": f"x at most {self.limit} (a deliberately long check name)", "passed": ok, "checked": 1,
+            "n_violations": int(not ok), "violations": [], "measured": {"max": self.value}})
+
+
+def scenario(run):
+    run.figure("gate_ticks", run.sim.ticks(run.p.gate_ms, "ms"), "ns")
+    run.check(AtMost(run.p.x, 2))
+    if run.p.x == 4:
+        raise RuntimeError("x = 4 breaks the run")
+'''
+
+
+@pytest.fixture
+def timed(tmp_path: Path) -> str:
+    path = tmp_path / "timed.py"
+    path.write_text(TIMED)
+    return str(path)
+
+
+def test_times_are_drawn_in_whole_ticks_and_integers_in_whole_numbers(timed: str) -> None:
+    runs = plan(timed, random={"gate_ms": ("0.5", "3"), "x": None}, samples=40)
+    gates = [Fraction(Decimal(r.overrides["gate_ms"])) for r in runs]
+    assert all((g * 10**6).denominator == 1 for g in gates)  # 1 ns = 1e-6 ms
+    assert all(Fraction(1, 2) <= g <= 3 for g in gates) and len(set(gates)) == 40
+    assert {r.overrides["x"] for r in runs} <= {"0", "1", "2", "3", "4", "5"}
+    level = plan(timed, random={"level": None}, samples=3)  # not a time: uniform, as it prints
+    assert all(0.0 <= float(r.overrides["level"]) <= 1.0 for r in level)
+
+
+def test_a_declared_step_gives_values_on_that_step(timed: str) -> None:
+    runs = plan(timed, random={"gate_ms": ("0.5", "1.5", "0.25"), "x": ("1", "5", "2")}, samples=60)
+    assert {r.overrides["gate_ms"] for r in runs} == {"0.5", "0.75", "1", "1.25", "1.5"}
+    assert {r.overrides["x"] for r in runs} == {"1", "3", "5"}
+    with pytest.raises(ConfigurationError, match=r"must be whole numbers of the time resolution \(1 ns\)"):
+        plan(timed, random={"gate_ms": ("0.5", "1.5", "0.0000001")})
+    with pytest.raises(ConfigurationError, match=r"step of x = 0.5 is not allowed \(allowed: > 0, whole\)"):
+        plan(timed, random={"x": ("1", "5", "0.5")})
+    assert parse_random(["gate_ms=0.5:1.5:0.25"]) == {"gate_ms": ("0.5", "1.5", "0.25")}
+    with pytest.raises(ConfigurationError, match="NAME=LOW:HIGH:STEP"):
+        parse_random(["gate_ms=0.5:1:2:3"])
+
+
+def test_short_columns_a_legend_and_the_files_next_to_the_table(timed: str, tmp_path: Path) -> None:
+    runs = plan(timed, grid={"x": [1, 3, 4]}, random={"gate_ms": ("1", "2")}, samples=1)
+    table = sweep(timed, runs, workers=0, progress=False, out=tmp_path / "out")
+    assert table.attrs["legend"] == {"c1": "x at most 2 (a deliberately long check name)"}
+    assert table.attrs["swept"] == ["gate_ms", "x"]
+    assert table["verdict"].tolist() == ["PASS", "FAIL", "ERROR"]
+    assert table["c1.passed"].tolist()[:2] == [True, False]
+    assert table["c1.max"].tolist()[:2] == [1, 3]
+    assert table["failed"].tolist() == ["", "c1", ""]
+    assert table["fig.gate_ticks"].tolist()[:2] == [int(Decimal(r.overrides["gate_ms"]) * 10**6) for r in runs[:2]]
+    meta = json.loads((tmp_path / "out" / "sweep.json").read_text())
+    assert meta["legend"] == table.attrs["legend"] and meta["verdicts"] == {"ERROR": 1, "FAIL": 1, "PASS": 1}
+    assert meta["units"] == {"gate_ticks": "ns"}
+    page = (tmp_path / "out" / "sweep.html").read_text()
+    assert "gate_ticks vs gate_ms" in page and "gate_ticks vs x" in page
+    assert "<script src=" not in page.replace("<script src=\"data:", "")  # Bokeh inlined: opens offline
+    assert "x = 4 breaks the run" in page and "x at most 2 (a deliberately long check name)" in page
+
+
+def test_the_command_line_says_why_runs_failed(timed: str, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    status = main(["sweep", timed, "--grid", "x=0,3,4,3,4,3,4,3", "--workers", "0", "--out", str(tmp_path)])
+    assert status == 1  # a run broke
+    out, err = capsys.readouterr()
+    assert "8 runs in" in out and "3 ERROR, 4 FAIL, 1 PASS" in out
+    lines = [line.strip() for line in out.splitlines()]
+    assert "run 1 (x=3): FAIL  c1 x at most 2 (a deliberately long check name) (1 violation)" in lines
+    assert "run 2 (x=4): ERROR  " + f"{timed}:25: RuntimeError: x = 4 breaks the run" in lines
+    assert sum(line.startswith("run ") for line in lines) == 5
+    assert "... and 2 more (column 'verdict', 'error' and 'failed' of the table)" in lines
+    assert "c1 = x at most 2 (a deliberately long check name)" in lines
+    # not a terminal: progress is plain lines, no carriage returns
+    assert "\r" not in err and "sweep timed: 8/8 runs (3 ERROR, 4 FAIL, 1 PASS)" in err
+
+
+@pytest.mark.fmu
+def test_a_float_millisecond_parameter_sweeps_without_errors(tmp_path: Path,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
+    status = main(["sweep", "laser_pwm", "--random", "gate_ms=0.5:3", "--samples", "6", "--workers", "0",
+                   "--out", str(tmp_path), "--no-report"])
+    out = capsys.readouterr().out
+    table = pd.read_parquet(tmp_path / "sweep.parquet")
+    assert status == 0, out
+    assert len(table) == 6 and set(table["verdict"]) == {"PASS"}
+    assert len(set(table["p.gate_ms"])) == 6
+    assert "6 runs in" in out and "6 PASS" in out
