@@ -181,7 +181,7 @@ def _args_sweep(parser: argparse.ArgumentParser) -> None:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from cosim import sweep
+    from cosim import sweep, sweep_report
     from cosim.scenario import load
 
     scenario = load(args.scenario)
@@ -190,11 +190,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     out = args.out or Path("results") / f"sweep-{scenario.name}"
     table = sweep.sweep(args.scenario, runs, workers=args.workers, scheduler=args.scheduler, out=out,
                         report=not args.no_report)
-    verdicts = sweep.verdict_counts(table)
+    verdicts = sweep_report.verdict_counts(table)
     startup = f", {table.attrs['startup_s']:.1f} s of it starting Dask" if table.attrs["startup_s"] else ""
     print(f"{len(table)} runs in {table.attrs['wall_time_s']:.1f} s{startup}: "
           + ", ".join(f"{n} {v}" for v, n in verdicts.items()))
-    for line in sweep.reasons(table, limit=SHOWN_FAILURES):
+    for line in sweep_report.reasons(table, limit=SHOWN_FAILURES):
         print(f"  {line}")
     for key, name in table.attrs["legend"].items():
         print(f"  {key} = {name}")

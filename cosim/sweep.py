@@ -376,43 +376,14 @@ def write(table: Any, folder: Path, *, scenario: str, report: bool = True) -> No
     """Write ``sweep.parquet``, ``sweep.json`` (legend, units, counts) and the report ``sweep.html``."""
     folder.mkdir(parents=True, exist_ok=True)
     table.to_parquet(folder / "sweep.parquet", index=False)
+    from cosim.sweep_report import verdict_counts, write_report
+
     meta = {"scenario": scenario, "runs": len(table), "verdicts": verdict_counts(table),
             "swept": table.attrs["swept"], "legend": table.attrs["legend"], "units": table.attrs["units"],
             "wall_time_s": round(table.attrs["wall_time_s"], 3)}
     (folder / "sweep.json").write_text(json.dumps(meta, indent=1) + "\n")
     if report:
-        from cosim.sweep_report import write_report
-
         write_report(table, folder / "sweep.html", scenario=scenario)
-
-
-def verdict_counts(table: Any) -> dict[str, int]:
-    """Runs per verdict, e.g. ``{"FAIL": 1, "PASS": 5}``."""
-    return {str(k): int(v) for k, v in sorted(table["verdict"].value_counts().items())} if len(table) else {}
-
-
-def reasons(table: Any, *, limit: int = 5) -> list[str]:
-    """Why runs did not pass: one line for each of the first ``limit`` such runs, then a count of the rest."""
-    legend = table.attrs.get("legend", {})
-    swept = table.attrs.get("swept", [])
-    bad = table[table["verdict"] != "PASS"] if len(table) else table
-    lines = []
-    for _, row in bad.head(limit).iterrows():
-        values = ", ".join(f"{p}={row[f'p.{p}']}" for p in swept if f"p.{p}" in row)
-        if row["verdict"] == "ERROR":
-            why = str(row["error"]).splitlines()[0] if row["error"] else "no error message"
-        else:
-            why = "; ".join(f"{key} {legend.get(key, '')} ({_violations(row[f'{key}.n_violations'])})"
-                            for key in str(row["failed"]).split(", ") if key) or "a check failed"
-        lines.append(f"run {int(row['index'])} ({values}): {row['verdict']}  {why}")
-    if len(bad) > limit:
-        lines.append(f"... and {len(bad) - limit} more (column 'verdict', 'error' and 'failed' of the table)")
-    return lines
-
-
-def _violations(count: Any) -> str:
-    n = int(count)
-    return f"{n} violation{'s' if n != 1 else ''}"
 
 
 def parse_grid(items: Sequence[str]) -> dict[str, list[str]]:

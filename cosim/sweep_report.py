@@ -84,8 +84,6 @@ def _scatter(table: Any, parameter: str | None, y: str, *, unit: str) -> Any:
 
 
 def _header(table: Any, *, scenario: str, swept: list[str]) -> str:
-    from cosim.sweep import reasons, verdict_counts
-
     counts = ", ".join(f'<span style="color:{VERDICT_COLOURS.get(v, "black")}">{n} {v}</span>'
                        for v, n in verdict_counts(table).items())
     legend = table.attrs.get("legend", {})
@@ -98,3 +96,32 @@ def _header(table: Any, *, scenario: str, swept: list[str]) -> str:
             + (f" {errors} ERROR run(s) produced no figures and are not plotted." if errors else "") + "</p>"
             + (f"<p>Check columns:</p><ul>{items}</ul>" if items else "")
             + (f"<p>Runs that did not pass:</p><ul>{why}</ul>" if why else ""))
+
+
+def verdict_counts(table: Any) -> dict[str, int]:
+    """Runs per verdict, e.g. ``{"FAIL": 1, "PASS": 5}``."""
+    return {str(k): int(v) for k, v in sorted(table["verdict"].value_counts().items())} if len(table) else {}
+
+
+def reasons(table: Any, *, limit: int = 5) -> list[str]:
+    """Why runs did not pass: one line for each of the first ``limit`` such runs, then a count of the rest."""
+    legend = table.attrs.get("legend", {})
+    swept = table.attrs.get("swept", [])
+    bad = table[table["verdict"] != "PASS"] if len(table) else table
+    lines = []
+    for _, row in bad.head(limit).iterrows():
+        values = ", ".join(f"{p}={row[f'p.{p}']}" for p in swept if f"p.{p}" in row)
+        if row["verdict"] == "ERROR":
+            why = str(row["error"]).splitlines()[0] if row["error"] else "no error message"
+        else:
+            why = "; ".join(f"{key} {legend.get(key, '')} ({_violations(row[f'{key}.n_violations'])})"
+                            for key in str(row["failed"]).split(", ") if key) or "a check failed"
+        lines.append(f"run {int(row['index'])} ({values}): {row['verdict']}  {why}")
+    if len(bad) > limit:
+        lines.append(f"... and {len(bad) - limit} more (column 'verdict', 'error' and 'failed' of the table)")
+    return lines
+
+
+def _violations(count: Any) -> str:
+    n = int(count)
+    return f"{n} violation{'s' if n != 1 else ''}"

@@ -15,7 +15,7 @@ from mkdocs.structure.files import File, Files
 
 def on_files(files: Files, config: Any) -> Files:
     root = Path(config["config_file_path"]).parent
-    for readme in sorted((root / "fmu_src").glob("*/readme.md")):
+    for readme in sorted((root / "fmu_src").glob("*/readme.md")):  # the models' and common/'s
         files.append(File.generated(config, f"fmu_src/{readme.parent.name}/readme.md", abs_src_path=str(readme)))
     return files
 
