@@ -57,7 +57,7 @@ MAX_MAGNITUDE = Fraction(10) ** 300
 """Largest magnitude any number may have (floats reach 1.8e308; registers are far smaller)."""
 
 
-_SHOWN_IN_FULL = 10**30
+_SHOWN_IN_FULL = Fraction(10) ** 30
 
 
 class _Approximately(str):
@@ -92,7 +92,9 @@ def shown(value: object) -> object:
         value = int(value)
     elif isinstance(value, float) and type(value) is not float:
         value = float(value)
-    if isinstance(value, int | Fraction) and not isinstance(value, bool) and abs(value) > _SHOWN_IN_FULL:
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int | Fraction) and abs(Fraction(value)) > _SHOWN_IN_FULL:
         return _approximately(value)
     if isinstance(value, Fraction):
         if value.denominator == 1:

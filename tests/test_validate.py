@@ -101,7 +101,7 @@ def test_shown_keeps_huge_and_numpy_values_readable(value: object, text: str) ->
 def test_in_range_shows_the_value_as_it_was_given() -> None:
     with pytest.raises(ConfigurationError, match=r"^inertia = 0\.0 is not allowed \(allowed: > 0\)$"):
         validate.positive(0.0, "inertia")
-    with pytest.raises(ConfigurationError, match=r"^x = 1e\+5000 is not allowed \(allowed: a finite number of magnitude"):
+    with pytest.raises(ConfigurationError, match=r"^x = 1e\+5000 is not allowed \(allowed: a finite number of magni"):
         validate.exact(10**5000, "x")
 
 
