@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import control
 import numpy as np
 
+from cosim import validate
 from cosim.controllers.pmac.encoder import ONE_OVER_T_BITS, EncoderSample, extend_one_over_t
 from cosim.controllers.pmac.servo import DAC_MAX, MotorModel, PidDesign
 from cosim.errors import ConfigurationError
@@ -171,8 +172,7 @@ def connect_servo(motor: Motor, plant: Any, *, fraction_bits: int = ONE_OVER_T_B
     PlantEncoder
         The servo's encoder (its feedback source).
     """
-    if not 0 <= fraction_bits <= 8:
-        raise ConfigurationError.out_of_range("fraction_bits", fraction_bits, "0..8")
+    validate.integer(fraction_bits, "fraction_bits", low=0, high=8)
     encoder = PlantEncoder(plant)
     plant.drive(command, motor.dac, convert=dac_volts)
 

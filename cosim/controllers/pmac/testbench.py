@@ -18,6 +18,7 @@ from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from cosim import validate
 from cosim.controllers.pmac.encoder import EncoderSample
 from cosim.controllers.pmac.servo import MotorModel
 from cosim.controllers.pmac.units import ServoClock
@@ -71,16 +72,15 @@ class AnalyticConveyor:
                  phases: Sequence[tuple[int, Number]] = (), position_counts: Number = 0,
                  marks: Sequence[Number] = (), mark_width_counts: Number = 1, name: str = "conveyor") -> None:
         self.sim = sim
-        v = Fraction(speed_counts_per_ms) / _NS_PER_MS
-        p = Fraction(position_counts)
-        if v < 0:
-            raise ConfigurationError.out_of_range("speed_counts_per_ms", speed_counts_per_ms, ">= 0 (forward only)")
+        v = validate.positive(speed_counts_per_ms, "speed_counts_per_ms", zero=True,
+                              allowed=">= 0 (forward only)") / _NS_PER_MS
+        p = self._p0 = validate.exact(position_counts, "position_counts")
+        self._v0 = v
         t = 0
         self._phases: list[tuple[int, Fraction, Fraction, Fraction]] = []  # (t_start, p, v [counts/ns], a)
         for duration_ns, accel in phases:
-            if not isinstance(duration_ns, int) or duration_ns <= 0:
-                raise ConfigurationError.out_of_range("phase duration_ns", duration_ns, "integers > 0 ns")
-            a = Fraction(accel) / _NS_PER_MS**2
+            validate.integer(duration_ns, "phase duration_ns", low=1, allowed="integers > 0 ns")
+            a = validate.exact(accel, "phase acceleration") / _NS_PER_MS**2
             self._phases.append((t, p, v, a))
             p, v = p + v * duration_ns + a * duration_ns * duration_ns / 2, v + a * duration_ns
             t += duration_ns
@@ -89,18 +89,14 @@ class AnalyticConveyor:
                     f"acceleration of the phase ending at {t} ns", accel,
                     "values that keep the speed >= 0 (the stand-in conveyor only moves forward)")
         self._phases.append((t, p, v, Fraction(0)))
-        self._p0 = Fraction(position_counts)
-        self._v0 = Fraction(speed_counts_per_ms) / _NS_PER_MS
         self._cache: dict[Fraction, int | None] = {}
         self.mark = Signal(sim, f"{name}.mark", kind="bit", description="registration-mark sensor")
         self.mark_times: list[tuple[int, int]] = []
-        width = Fraction(mark_width_counts)
-        if width <= 0:
-            raise ConfigurationError.out_of_range("mark_width_counts", mark_width_counts, "> 0 counts")
+        width = validate.positive(mark_width_counts, "mark_width_counts", unit="counts")
         for m in marks:
-            if Fraction(m) <= self._p0:
-                raise ConfigurationError.out_of_range("mark position", m, f"> position_counts = {position_counts}")
-            rise, fall = self.time_at(Fraction(m)), self.time_at(Fraction(m) + width)
+            mark = validate.in_range(m, "mark position", low=self._p0, low_open=True,
+                                     allowed=f"> position_counts = {position_counts}")
+            rise, fall = self.time_at(mark), self.time_at(mark + width)
             if rise is not None:
                 self.mark_times.append((rise, fall if fall is not None else -1))
                 sim.call_at(rise, Priority.PLANT_EVENT, self._mark_on)
