@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
@@ -53,9 +54,9 @@ class Signal:
         if self.kind == "bit":
             return 1 if value else 0
         if self.kind == "int":
-            if isinstance(value, float) and not value.is_integer():
-                raise ConfigurationError(f"signal {self.name} is an integer; got {value!r}")
-            return int(value)
+            if isinstance(value, int) or (type(value) is float and value.is_integer()):  # the common cases
+                return int(value)
+            return validate.integer(value, f"signal {self.name}", whole=True)
         return float(value)
 
     def subscribe(self, listener: Listener) -> None:
@@ -124,11 +125,10 @@ class PulseTrain:
 
         Segments are emitted at or before ``t0`` (a controller announces the slot it starts).
         """
-        if count < 0 or duration <= 0 or direction not in (0, 1):
-            raise ConfigurationError(
-                f"{self.name}: segment count={count} (>= 0), duration={duration} (> 0 ticks), "
-                f"direction={direction} (0 or 1) is not valid"
-            )
+        validate.integer(t0, "segment start", unit="ticks", where=self.name)
+        validate.integer(duration, "segment duration", low=1, unit="ticks", where=self.name)
+        validate.integer(count, "segment count", low=0, kind="an integer", where=self.name)
+        validate.integer(direction, "segment direction", low=0, high=1, allowed="0 or 1", where=self.name)
         self._record_segment(t0, duration, count, direction)
         self.position += count if direction else -count
         for listener in self._listeners:
