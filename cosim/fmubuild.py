@@ -25,7 +25,7 @@ import zipfile
 from collections.abc import Iterator
 from pathlib import Path
 
-from cosim import fmudesc
+from cosim import fmudesc, validate
 from cosim.errors import ConfigurationError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,8 +58,7 @@ def fmu_path(model: str, fmi_version: int = 3) -> Path:
 
 
 def _check_version(fmi_version: int) -> None:
-    if fmi_version not in FMI_VERSIONS:
-        raise ConfigurationError.out_of_range("fmi_version", fmi_version, "2 or 3")
+    validate.choice(fmi_version, "fmi_version", FMI_VERSIONS, allowed="2 or 3")
 
 
 def _model_dir(model: str) -> Path:

@@ -12,7 +12,6 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from cosim import validate
-from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from cosim.kernel import Simulation
@@ -40,8 +39,7 @@ class Signal:
 
     def __init__(self, sim: Simulation, name: str, *, kind: str = "bit", initial: float = 0,
                  unit: str = "", description: str = "") -> None:
-        if kind not in ("bit", "int", "real"):
-            raise ConfigurationError.out_of_range(f"kind of signal {name}", kind, "bit, int, real")
+        validate.choice(kind, f"kind of signal {name}", ("bit", "int", "real"))
         self.sim = sim
         self.name = name
         self.kind = kind

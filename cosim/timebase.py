@@ -118,8 +118,7 @@ class TimeBase:
                     f"{name} = {value!r} is not a time; write a number and a unit, e.g. '250 us'"
                 )
             value, unit = match.group(1), match.group(2)
-        if unit not in UNITS_S:
-            raise ConfigurationError.out_of_range(f"unit of {name}", unit, ", ".join(UNITS_S))
+        unit = validate.choice(unit, f"unit of {name}", tuple(UNITS_S))
         exact = validate.exact(value, name) * UNITS_S[unit] / self.resolution_s
         if exact.denominator != 1:
             raise ConfigurationError(

@@ -17,7 +17,7 @@ function            accepts                                      returns
 :func:`positive`    any number :func:`exact` takes                Fraction > 0 (or >= 0)
 :func:`finite`      any real number                              float, finite
 :func:`flag`        bool, 0, 1 (or a language's other yes: -1)   bool
-:func:`choice`      one of the allowed values                    the value
+:func:`choice`      one of the allowed values                    the option it equals
 ==================  ===========================================  =================================
 
 Non-finite values (``inf``, ``nan``) and magnitudes beyond :data:`MAX_MAGNITUDE` are refused by
@@ -262,11 +262,11 @@ def flag(value: object, name: str, *, where: str = "", true: Sequence[int] = (1,
     raise _refuse(name, value, allowed or "True/False (or 1/0)", where)
 
 
-def choice(value: T, name: str, options: Sequence[T], *, where: str = "", allowed: str | None = None) -> T:
-    """One of ``options`` (compared with ``==``; ``True`` is not taken for ``1``)."""
+def choice(value: object, name: str, options: Sequence[T], *, where: str = "", allowed: str | None = None) -> T:
+    """The option equal to ``value`` (compared with ``==``; ``True`` is not taken for ``1``)."""
     for option in options:
         if type(value) is bool and type(option) is not bool:
             continue
         if value == option:
-            return value
+            return option
     raise _refuse(name, value, allowed or ", ".join(str(o) for o in options), where)

@@ -113,3 +113,9 @@ def test_flag_takes_the_values_a_controller_language_has_for_yes() -> None:
             validate.flag(bad, "SERVO", **on_off)
     with pytest.raises(ConfigurationError, match=r"enabled = -1 is not allowed"):
         validate.flag(-1, "enabled")
+
+
+def test_choice_returns_the_option_itself() -> None:
+    number = validate.choice(Fraction(35), "ATYPE", (0, 35))
+    assert number == 35 and type(number) is int
+    assert validate.choice("ms", "unit", ("s", "ms")) == "ms"
