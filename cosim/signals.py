@@ -123,14 +123,19 @@ class PulseTrain:
 
         Segments are emitted at or before ``t0`` (a controller announces the slot it starts).
         """
-        validate.integer(t0, "segment start", unit="ticks", where=self.name)
-        validate.integer(duration, "segment duration", low=1, unit="ticks", where=self.name)
-        validate.integer(count, "segment count", low=0, kind="an integer", where=self.name)
-        validate.integer(direction, "segment direction", low=0, high=1, allowed="0 or 1", where=self.name)
+        if not (type(t0) is type(duration) is type(count) is int and duration > 0 and count >= 0
+                and (direction == 0 or direction == 1)):  # the common case skips the checks: one per slot and axis
+            self._check_segment(t0, duration, count, direction)
         self._record_segment(t0, duration, count, direction)
         self.position += count if direction else -count
         for listener in self._listeners:
             listener(self, t0, duration, count, direction)
+
+    def _check_segment(self, t0: object, duration: object, count: object, direction: object) -> None:
+        validate.integer(t0, "segment start", unit="ticks", where=self.name)
+        validate.integer(duration, "segment duration", low=1, unit="ticks", where=self.name)
+        validate.integer(count, "segment count", low=0, kind="an integer", where=self.name)
+        validate.integer(direction, "segment direction", low=0, high=1, allowed="0 or 1", where=self.name)
 
     def pulse(self, t: int, direction: int) -> None:
         """Emit a single pulse at tick ``t`` (for trains that are not evenly spread)."""

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from decimal import Decimal
 from enum import IntEnum
 from fractions import Fraction
+from functools import cached_property
 
 from cosim import validate
 from cosim.errors import ConfigurationError
@@ -129,8 +130,11 @@ class TimeBase:
 
     def check_ticks(self, value: object, *, name: str = "time", minimum: int | None = 0) -> int:
         """Accept an integer tick count (never a float) of at least ``minimum`` ticks."""
-        return validate.integer(value, name, low=minimum, unit="ticks", kind=(
-            f"an integer number of ticks ({self.unit} each); use TimeBase.ticks() to convert a value with a unit"))
+        return validate.integer(value, name, low=minimum, unit="ticks", kind=self._ticks_kind)
+
+    @cached_property
+    def _ticks_kind(self) -> str:  # built once: check_ticks runs for every event scheduled
+        return f"an integer number of ticks ({self.unit} each); use TimeBase.ticks() to convert a value with a unit"
 
     def seconds(self, ticks: int) -> float:
         """Ticks to float seconds: for the FMI call boundary and for display only."""
