@@ -704,3 +704,6 @@ def test_the_custom_check_of_the_docs_runs_as_shown() -> None:
     result = check.evaluate(sim.trace)
     assert result.summary() in section  # the output the page shows
     assert [v.t_ns for v in result.violations] == [4_000_000, 7_000_000]  # 6 -> 14, then 10 -> 0
+    with pytest.raises(ConfigurationError, match=r"^MaxCountStep\(pokeys\.x\.step\): slot = 0 is not allowed "
+                                                 r"\(allowed: >= 1 ticks\)$"):
+        namespace["MaxCountStep"]("pokeys.x.step", 0, 4)  # type: ignore[operator]
