@@ -215,7 +215,8 @@ def in_range(value: object, name: str, *, low: object = None, high: object = Non
              high_open: bool = False, unit: str = "", where: str = "", allowed: str | None = None) -> Fraction:
     """A number within bounds, exactly (see :func:`exact`).
 
-    ``low_open`` / ``high_open`` make a bound strict (``> low`` / ``< high``).
+    ``low_open`` / ``high_open`` make a bound strict (``> low`` / ``< high``). A refusal shows the
+    value as it was given (``0.0`` stays ``0.0``).
     """
     number = exact(value, name, where=where)
     lo = None if low is None else exact(low, f"lower bound of {name}")
