@@ -23,6 +23,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
 from fmpy.fmi3 import FMU3Slave
 
+from cosim import validate
 from cosim.errors import ConfigurationError, FmuError
 from cosim.timebase import TimeBase
 
@@ -204,10 +205,9 @@ class Fmu:
     def _check_value(var: _Variable, value: Value) -> None:
         if var.type == "Boolean" and not isinstance(value, bool | int):
             raise ConfigurationError(f"{var.name} is Boolean; got {value!r}")
-        if var.type in ("Integer", "Int32") and (
-            (isinstance(value, float) and not value.is_integer()) or not isinstance(value, int | float)
-        ):
-            raise ConfigurationError(f"{var.name} is an integer variable; got {value!r}")
+        if var.type in ("Integer", "Int32"):  # an Int32 never wraps: 2**32 + 1000 is refused, not stored as 1000
+            validate.integer(value, var.name, low=-(2**31), high=2**31 - 1, whole=True, kind="an integer",
+                             allowed=f"{-(2**31)}..{2**31 - 1} (Int32)")
 
     def get(self, name: str) -> Value:
         """Current value of variable ``name`` (the FMU is not advanced; see the master)."""

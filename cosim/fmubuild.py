@@ -36,7 +36,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from cosim import __version__, fmudesc
+from cosim import __version__, fmudesc, validate
 from cosim.errors import ConfigurationError
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -87,8 +87,7 @@ def fmu_path(model: str, fmi_version: int = 3) -> Path:
 
 
 def _check_version(fmi_version: int) -> None:
-    if fmi_version not in FMI_VERSIONS:
-        raise ConfigurationError.out_of_range("fmi_version", fmi_version, "2 or 3")
+    validate.choice(fmi_version, "fmi_version", FMI_VERSIONS, allowed="2 or 3")
 
 
 def _model_dir(model: str) -> Path:

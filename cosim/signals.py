@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-from cosim.errors import ConfigurationError
+from cosim import validate
 
 if TYPE_CHECKING:
     from cosim.kernel import Simulation
@@ -47,8 +47,7 @@ class Signal:
 
     def __init__(self, sim: Simulation, name: str, *, kind: str = "bit", initial: float = 0,
                  unit: str = "", description: str = "") -> None:
-        if kind not in ("bit", "int", "real"):
-            raise ConfigurationError.out_of_range(f"kind of signal {name}", kind, "bit, int, real")
+        validate.choice(kind, f"kind of signal {name}", ("bit", "int", "real"))
         self.sim = sim
         self.name = name
         self.kind = kind
@@ -61,9 +60,9 @@ class Signal:
         if self.kind == "bit":
             return 1 if value else 0
         if self.kind == "int":
-            if isinstance(value, float) and not value.is_integer():
-                raise ConfigurationError(f"signal {self.name} is an integer; got {value!r}")
-            return int(value)
+            if isinstance(value, int) or (type(value) is float and value.is_integer()):  # the common cases
+                return int(value)
+            return validate.integer(value, f"signal {self.name}", whole=True)
         return float(value)
 
     def subscribe(self, listener: Listener) -> None:
@@ -132,15 +131,19 @@ class PulseTrain:
 
         Segments are emitted at or before ``t0`` (a controller announces the slot it starts).
         """
-        if count < 0 or duration <= 0 or direction not in (0, 1):
-            raise ConfigurationError(
-                f"{self.name}: segment count={count} (>= 0), duration={duration} (> 0 ticks), "
-                f"direction={direction} (0 or 1) is not valid"
-            )
+        if not (type(t0) is type(duration) is type(count) is int and duration > 0 and count >= 0
+                and (direction == 0 or direction == 1)):  # the common case skips the checks: one per slot and axis
+            self._check_segment(t0, duration, count, direction)
         self._record_segment(t0, duration, count, direction)
         self.position += count if direction else -count
         for listener in self._listeners:
             listener(self, t0, duration, count, direction)
+
+    def _check_segment(self, t0: object, duration: object, count: object, direction: object) -> None:
+        validate.integer(t0, "segment start", unit="ticks", where=self.name)
+        validate.integer(duration, "segment duration", low=1, unit="ticks", where=self.name)
+        validate.integer(count, "segment count", low=0, kind="an integer", where=self.name)
+        validate.integer(direction, "segment direction", low=0, high=1, allowed="0 or 1", where=self.name)
 
     def pulse(self, t: int, direction: int) -> None:
         """Emit a single pulse at tick ``t`` (for trains that are not evenly spread)."""

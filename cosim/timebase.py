@@ -24,10 +24,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
+from decimal import Decimal
 from enum import IntEnum
 from fractions import Fraction
+from functools import cached_property
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 
 #: Seconds per unit for the units accepted by :func:`TimeBase.ticks`.
@@ -57,18 +59,6 @@ class Priority(IntEnum):
     SAMPLE = 40  # recording samples of analog outputs
 
 
-def _exact(value: int | float | str | Fraction | Decimal, what: str) -> Fraction:
-    if isinstance(value, bool):
-        raise ConfigurationError(f"{what} = {value!r} is not a number")
-    if isinstance(value, int | Fraction):
-        return Fraction(value)
-    try:
-        # A float is taken as the decimal the user wrote (its shortest repr), not as its binary value.
-        return Fraction(Decimal(str(value)))
-    except (InvalidOperation, ValueError) as exc:
-        raise ConfigurationError(f"{what} = {value!r} is not a number") from exc
-
-
 @dataclass(frozen=True)
 class TimeBase:
     """The declared resolution of simulation time.
@@ -90,8 +80,7 @@ class TimeBase:
     resolution_s: Fraction = Fraction(1, 10**9)
 
     def __post_init__(self) -> None:
-        if self.resolution_s <= 0:
-            raise ConfigurationError.out_of_range("resolution_s", self.resolution_s, "> 0")
+        object.__setattr__(self, "resolution_s", validate.positive(self.resolution_s, "resolution_s", unit="s"))
 
     @property
     def unit(self) -> str:
@@ -134,26 +123,22 @@ class TimeBase:
                     f"{name} = {value!r} is not a time; write a number and a unit, e.g. '250 us'"
                 )
             value, unit = match.group(1), match.group(2)
-        if unit not in UNITS_S:
-            raise ConfigurationError.out_of_range(f"unit of {name}", unit, ", ".join(UNITS_S))
-        exact = _exact(value, name) * UNITS_S[unit] / self.resolution_s
+        unit = validate.choice(unit, f"unit of {name}", tuple(UNITS_S))
+        exact = validate.exact(value, name) * UNITS_S[unit] / self.resolution_s
         if exact.denominator != 1:
             raise ConfigurationError(
-                f"{name} = {value} {unit} is not a whole number of ticks of the resolution "
+                f"{name} = {validate.shown(value)} {unit} is not a whole number of ticks of the resolution "
                 f"{self.unit} ({float(exact)} ticks); choose a value that is a multiple of {self.unit}"
             )
         return int(exact)
 
     def check_ticks(self, value: object, *, name: str = "time", minimum: int | None = 0) -> int:
-        """Accept an integer tick count (never a float) and check its lower bound."""
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigurationError(
-                f"{name} = {value!r} must be an integer number of ticks ({self.unit} each); "
-                "use TimeBase.ticks() to convert a value with a unit"
-            )
-        if minimum is not None and value < minimum:
-            raise ConfigurationError.out_of_range(name, value, f">= {minimum} ticks")
-        return value
+        """Accept an integer tick count (never a float) of at least ``minimum`` ticks."""
+        return validate.integer(value, name, low=minimum, unit="ticks", kind=self._ticks_kind)
+
+    @cached_property
+    def _ticks_kind(self) -> str:  # built once: check_ticks runs for every event scheduled
+        return f"an integer number of ticks ({self.unit} each); use TimeBase.ticks() to convert a value with a unit"
 
     def seconds(self, ticks: int) -> float:
         """Ticks to float seconds: for the FMI call boundary and for display only."""

@@ -16,8 +16,8 @@ function            accepts                                      returns
 :func:`in_range`    any number :func:`exact` takes                Fraction in the (half-)open range
 :func:`positive`    any number :func:`exact` takes                Fraction > 0 (or >= 0)
 :func:`finite`      any real number                              float, finite
-:func:`flag`        bool, 0, 1                                   bool
-:func:`choice`      one of the allowed values                    the value
+:func:`flag`        bool, 0, 1 (or a language's other yes: -1)   bool
+:func:`choice`      one of the allowed values                    the option it equals
 ==================  ===========================================  =================================
 
 Non-finite values (``inf``, ``nan``) and magnitudes beyond :data:`MAX_MAGNITUDE` are refused by
@@ -57,21 +57,53 @@ MAX_MAGNITUDE = Fraction(10) ** 300
 """Largest magnitude any number may have (floats reach 1.8e308; registers are far smaller)."""
 
 
+_SHOWN_IN_FULL = Fraction(10) ** 30
+
+
+class _Approximately(str):
+    """A number too large to print in full, shown as ``1e+5000`` (without quotes)."""
+
+    def __repr__(self) -> str:
+        return str(self)
+
+
+def _approximately(value: int | Fraction) -> _Approximately:
+    log = math.log10(abs(value.numerator)) - math.log10(value.denominator) if isinstance(value, Fraction) else (
+        math.log10(abs(value)))
+    exponent = math.floor(log)
+    mantissa = f"{10 ** (log - exponent):.6g}"
+    if mantissa == "10":
+        mantissa, exponent = "1", exponent + 1
+    return _Approximately(f"{'-' if value < 0 else ''}{mantissa}e+{exponent}")
+
+
 def shown(value: object) -> object:
     """A value as the user most likely wrote it, for messages (``2184.5`` rather than ``4369/2``).
 
+    numpy scalars are shown as the Python numbers they hold, and numbers beyond 1e30 in the form
+    ``1e+5000`` (six significant digits; printing a huge number in full can take minutes).
+
     Examples
     --------
-    >>> shown(Fraction(4369, 2)), shown(Fraction(8)), shown(Fraction(1, 3))
-    (2184.5, 8, Fraction(1, 3))
+    >>> shown(Fraction(4369, 2)), shown(Fraction(8)), shown(Fraction(1, 3)), shown(Fraction(10**5000))
+    (2184.5, 8, Fraction(1, 3), 1e+5000)
     """
+    if isinstance(value, numbers.Integral) and not isinstance(value, int):
+        value = int(value)
+    elif isinstance(value, float) and type(value) is not float:
+        value = float(value)
+    if isinstance(value, bool):
+        return value
+    if isinstance(value, int | Fraction) and abs(Fraction(value)) > _SHOWN_IN_FULL:
+        return _approximately(value)
     if isinstance(value, Fraction):
         if value.denominator == 1:
             return value.numerator
-        if abs(value) < MAX_MAGNITUDE:
-            as_float = float(value)
-            if Fraction(Decimal(str(as_float))) == value:
-                return as_float
+        as_float = float(value)
+        if Fraction(Decimal(str(as_float))) == value:
+            return as_float
+        if max(value.numerator.bit_length(), value.denominator.bit_length()) > 1000:
+            return _Approximately(f"about {as_float!r}")
     return value
 
 
@@ -128,7 +160,7 @@ def _bounds(low: object, high: object, unit: str, *, low_open: bool = False, hig
 
 
 def integer(value: object, name: str, *, low: int | None = None, high: int | None = None, unit: str = "",
-            where: str = "", allowed: str | None = None, whole: bool = False) -> int:
+            where: str = "", allowed: str | None = None, kind: str | None = None, whole: bool = False) -> int:
     """An integer in ``low..high`` (inclusive; either bound may be None).
 
     Parameters
@@ -146,37 +178,45 @@ def integer(value: object, name: str, *, low: int | None = None, high: int | Non
         Location prefix (file and line, key, or the object the value belongs to).
     allowed : str, optional
         The allowed range as text, when it says more than ``low..high unit``.
+    kind : str, optional
+        What the value must be, said when it is no integer at all (``"an integer number of ticks"``);
+        by default the allowed range is said then too.
     whole : bool
         Also accept any number with a whole value (``400.0``, ``Fraction(8, 2)``), as a
         controller's language does.
     """
-    if allowed is not None:
-        text = allowed
-    elif low is None and high is None:
-        text = "an integer" + (f" [{unit}]" if unit else "")
-    else:
-        text = _bounds(low, high, unit)
-    if isinstance(value, bool):
-        raise _refuse(name, value, text, where)
-    if isinstance(value, numbers.Integral):
+    if type(value) is int:  # the common case, first: this runs on every emitted pulse segment
+        number = value
+    elif isinstance(value, numbers.Integral) and not isinstance(value, bool):
         number = int(value)
-    elif whole:
-        fraction = exact(value, name, where=where)
-        if fraction.denominator != 1:
-            raise _refuse(name, fraction, text, where)
-        number = fraction.numerator
     else:
-        raise _refuse(name, value, text, where)
+        fraction = None
+        if whole and isinstance(value, Fraction):
+            fraction = value  # exact already, however large: the range says what is wrong
+        elif whole and not isinstance(value, bool):
+            fraction = exact(value, name, where=where)
+        if fraction is None or fraction.denominator != 1:
+            raise _refuse(name, value, kind or _integer_text(low, high, unit, allowed), where)
+        number = fraction.numerator
     if (low is not None and number < low) or (high is not None and number > high):
-        raise _refuse(name, number, text, where)
+        raise _refuse(name, number, _integer_text(low, high, unit, allowed), where)
     return number
+
+
+def _integer_text(low: int | None, high: int | None, unit: str, allowed: str | None) -> str:
+    if allowed is not None:
+        return allowed
+    if low is None and high is None:
+        return "an integer" + (f" [{unit}]" if unit else "")
+    return _bounds(low, high, unit)
 
 
 def in_range(value: object, name: str, *, low: object = None, high: object = None, low_open: bool = False,
              high_open: bool = False, unit: str = "", where: str = "", allowed: str | None = None) -> Fraction:
     """A number within bounds, exactly (see :func:`exact`).
 
-    ``low_open`` / ``high_open`` make a bound strict (``> low`` / ``< high``).
+    ``low_open`` / ``high_open`` make a bound strict (``> low`` / ``< high``). A refusal shows the
+    value as it was given (``0.0`` stays ``0.0``).
     """
     number = exact(value, name, where=where)
     lo = None if low is None else exact(low, f"lower bound of {name}")
@@ -185,7 +225,7 @@ def in_range(value: object, name: str, *, low: object = None, high: object = Non
         hi is not None and (number >= hi if high_open else number > hi))
     if bad:
         text = allowed or _bounds(lo, hi, unit, low_open=low_open, high_open=high_open)
-        raise _refuse(name, number, text, where)
+        raise _refuse(name, value, text, where)
     return number
 
 
@@ -208,20 +248,26 @@ def finite(value: object, name: str, *, where: str = "", allowed: str = "a finit
     return number
 
 
-def flag(value: object, name: str, *, where: str = "") -> bool:
-    """A yes/no setting: ``True``/``False`` or ``1``/``0``."""
+def flag(value: object, name: str, *, where: str = "", true: Sequence[int] = (1,), allowed: str | None = None) -> bool:
+    """A yes/no setting: ``True``/``False``, or a number equal to 0 (no) or to one of ``true`` (yes).
+
+    A controller's language may have more than one value for yes (Trio BASIC: ON = 1, TRUE = -1).
+    """
     if isinstance(value, bool):
         return value
-    if isinstance(value, numbers.Integral) and int(value) in (0, 1):
-        return bool(value)
-    raise _refuse(name, value, "True/False (or 1/0)", where)
+    if isinstance(value, numbers.Real):
+        if value == 0:
+            return False
+        if any(value == option for option in true):
+            return True
+    raise _refuse(name, value, allowed or "True/False (or 1/0)", where)
 
 
-def choice(value: T, name: str, options: Sequence[T], *, where: str = "", allowed: str | None = None) -> T:
-    """One of ``options`` (compared with ``==``; ``True`` is not taken for ``1``)."""
+def choice(value: object, name: str, options: Sequence[T], *, where: str = "", allowed: str | None = None) -> T:
+    """The option equal to ``value`` (compared with ``==``; ``True`` is not taken for ``1``)."""
     for option in options:
         if type(value) is bool and type(option) is not bool:
             continue
         if value == option:
-            return value
+            return option
     raise _refuse(name, value, allowed or ", ".join(str(o) for o in options), where)

@@ -207,6 +207,18 @@ def test_a_signal_of_the_wrong_kind_is_a_configuration_error() -> None:
         (lambda: Duration(EdgeRef("d.a"), EdgeRef("d.b"), equals=5, max=9), r"equals \(with tol\) excludes"),
         (lambda: Duration(EdgeRef("d.a"), EdgeRef("d.b"), min=9, max=5), r"min = 9 is not allowed"),
         (lambda: EdgeRef("d.a", which="all"), r"which = 'all' is not allowed \(allowed: each, first, last\)"),
+        # non-finite and absurdly large numbers (issue 22): our error, never a crash
+        (lambda: IntervalsBelow("d.lvl", float("nan")),
+         r"^IntervalsBelow\(d\.lvl\): threshold = nan is not allowed \(allowed: a finite number\)$"),
+        (lambda: Bound("d.err", upper=float("inf")), r"^Bound\(d\.err\): upper = inf is not allowed"),
+        (lambda: ValueAt("d.lvl", 10, float("nan")), r"^ValueAt\(d\.lvl\): expected = nan is not allowed"),
+        (lambda: ValueAt("d.lvl", 10, 0, tol=float("nan")), r"^ValueAt\(d\.lvl\): tol = nan is not allowed"),
+        (lambda: MaxPulseRate(STEP, 10**5000),
+         r"max_rate_hz = 1e\+5000 is not allowed \(allowed: a finite number of magnitude <= 1e300\)$"),
+        (lambda: EdgeRef("d.a", value=10**5000),  # type: ignore[arg-type]
+         r"^change of d\.a: value = 1e\+5000 is not allowed \(allowed: a finite number\)$"),
+        (lambda: Duration(EdgeRef("d.a"), EdgeRef("d.b"), max=float("nan")),  # type: ignore[arg-type]
+         r"max = nan is not allowed \(allowed: an integer number of ticks\)$"),
     ],
 )
 def test_bad_parameters_name_the_parameter_value_and_range(make: Callable[[], object], message: str) -> None:
@@ -692,3 +704,6 @@ def test_the_custom_check_of_the_docs_runs_as_shown() -> None:
     result = check.evaluate(sim.trace)
     assert result.summary() in section  # the output the page shows
     assert [v.t_ns for v in result.violations] == [4_000_000, 7_000_000]  # 6 -> 14, then 10 -> 0
+    with pytest.raises(ConfigurationError, match=r"^MaxCountStep\(pokeys\.x\.step\): slot = 0 is not allowed "
+                                                 r"\(allowed: >= 1 ticks\)$"):
+        namespace["MaxCountStep"]("pokeys.x.step", 0, 4)  # type: ignore[operator]

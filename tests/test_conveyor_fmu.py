@@ -249,6 +249,10 @@ def test_python_parameters_refuse_what_the_fmu_refuses() -> None:
         ConveyorParameters(mark_pitch=0.01, mark_length=0.01)
     with pytest.raises(ConfigurationError, match="counts_per_metre = 0"):
         ConveyorParameters(counts_per_metre=0)
+    with pytest.raises(ConfigurationError, match=r"^ConveyorParameters: speed_start = nan is not allowed"):
+        ConveyorParameters(speed_start=float("nan"))
+    with pytest.raises(ConfigurationError, match=r"^ConveyorParameters: tau_drive = inf is not allowed"):
+        ConveyorParameters(tau_drive=float("inf"))
     with pytest.raises(ConfigurationError, match="not Conveyor parameters: pitch"):
         ConveyorParameters.from_mapping({"pitch": 0.2})
 

@@ -20,7 +20,7 @@ from fmpy import simulate_fmu
 from fmpy.build import build_platform_binary
 from fmpy.validation import validate_fmu
 
-from cosim.errors import FmuError
+from cosim.errors import ConfigurationError, FmuError
 from cosim.fmu import Fmu
 from cosim.fmubuild import ensure_fmu
 from cosim.plants.laser import pwm_energy
@@ -128,6 +128,20 @@ def test_bad_values_are_rejected_by_the_fmu_with_its_reason(laser_fmu: Path, nam
     with pytest.raises(FmuError) as info:
         Fmu(laser_fmu, parameters={name: value})
     assert message in str(info.value)
+
+
+@pytest.mark.parametrize(("value", "message"), [
+    (2**32 + 1000, r"^pwm_period = 4294968296 is not allowed \(allowed: -2147483648..2147483647 \(Int32\)\)$"),
+    (2.5, r"^pwm_period = 2\.5 is not allowed \(allowed: an integer\)$"),
+    (float("nan"), r"^pwm_period = nan is not allowed \(allowed: a finite number\)$"),
+])
+def test_an_integer_input_never_wraps(laser_fmu: Path, value: float, message: str) -> None:
+    """Issue 22: ``set('pwm_period', 2**32 + 1000)`` used to store 1000."""
+    with Fmu(laser_fmu) as fmu:
+        with pytest.raises(ConfigurationError, match=message):
+            fmu.set("pwm_period", value)
+        fmu.set("pwm_period", 4000.0)  # a whole float is still fine
+        assert fmu.get("pwm_period") == 4000
 
 
 def test_parameters_are_fixed_after_initialisation(laser_fmu: Path) -> None:

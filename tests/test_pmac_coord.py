@@ -136,6 +136,31 @@ def test_percent_register_is_ignored_under_external_time_base(sim: Simulation) -
     assert rig.cs.percent_register.value == 2**21 // 10
 
 
+#: Non-finite and absurdly large numbers through the Python API (issue 22): our error, never a crash.
+FINITE = r"\(allowed: a finite number\)"
+NON_FINITE = [
+    ("%n nan", lambda pmac: pmac.command_percent(1, float("nan")),
+     rf"^%n \(feedrate override\) = nan is not allowed {FINITE}$"),
+    ("%n inf", lambda pmac: pmac.command_percent(1, float("inf")),
+     rf"^%n \(feedrate override\) = inf is not allowed {FINITE}$"),
+    ("I10 inf", lambda pmac: pmac.set_ivar(10, float("inf")),
+     r"^I10 \(servo interrupt time\) = inf is not allowed \(allowed: integers 1..8388607 \(2\^-23 ms\)\)$"),
+    ("I10 1e5000", lambda pmac: pmac.set_ivar(10, 10**5000),
+     r"^I10 \(servo interrupt time\) = 1e\+5000 is not allowed \(allowed: integers 1..8388607"),
+    ("LINEAR nan", lambda pmac: LinearMove(float("nan"), 10), rf"^target = nan is not allowed {FINITE}$"),
+    ("F inf", lambda pmac: LinearMove(10, float("inf")), rf"^F \(feedrate\) = inf is not allowed {FINITE}$"),
+    ("DWELL nan", lambda pmac: Dwell(float("nan")), rf"^DWELL time = nan is not allowed {FINITE}$"),
+    ("jog nan", lambda pmac: pmac.coordinate_system(1).jog(10, speed_per_ms=float("nan")),
+     rf"^jog speed_per_ms \(Ixx22\) = nan is not allowed {FINITE}$"),
+]
+
+
+@pytest.mark.parametrize(("case", "call", "message"), NON_FINITE, ids=[c[0] for c in NON_FINITE])
+def test_non_finite_and_huge_values_are_refused(sim: Simulation, case: str, call: Any, message: str) -> None:
+    with pytest.raises(ConfigurationError, match=message):
+        call(Pmac(sim))
+
+
 def test_percent_saturates_at_largest_implementable_value(sim: Simulation) -> None:
     pmac = Pmac(sim)
     assert pmac.command_percent(1, 500) == 2**23 - 1

@@ -54,6 +54,13 @@ def test_cs_numbering_pmac_and_turbo() -> None:
         ("I8011=$1000000",
          r"I8011 \(conversion table line\) = 16777216 is not allowed \(allowed: integers 0..16777215"),
         ("I10=fast", r"cell.pmc line 1: I10 = 'fast' is not a number"),
+        # non-finite and absurdly large values are refused at once (issue 22: a crash, or a hang for 1e99999999)
+        ("I10=Infinity", r"^cell.pmc line 1: I10 = 'Infinity' is not allowed \(allowed: a finite number\)$"),
+        ("I10=sNaN", r"^cell.pmc line 1: I10 = 'sNaN' is not allowed \(allowed: a finite number\)$"),
+        ("I10=1e99999999",
+         r"^cell.pmc line 1: I10 = '1e99999999' is not allowed \(allowed: a finite number of magnitude <= 1e300\)$"),
+        ("I194=1e300", r"^cell.pmc line 1: I194 \(Ix94, time-base slew limit\) = 1e\+300 is not allowed "
+                       r"\(allowed: integers 0..8388607 \(2\^-23 ms per servo cycle\)\)$"),
         ("I193=@I10", r"I193 \(address of I10\) = '@I10' is not allowed \(allowed: @I8000..@I8191\)"),
         ("CLOSE", r"cell.pmc line 1: 'CLOSE' is not an I-variable assignment"),
         ("I10=3713707 #1->X", r"'#1->X' is not an I-variable assignment"),

@@ -24,7 +24,7 @@ def test_axis_parameters_convert_exactly_to_slot_units() -> None:
     ({"max_speed_hz": -5.5}, r"max_speed_hz = -5.5 is not allowed"),
     ({"accel": 0}, r"axis x: accel = 0 is not allowed \(allowed: > 0 pulses/s\^2\)"),
     ({"accel": -1}, r"axis x: accel = -1 is not allowed \(allowed: > 0 pulses/s\^2\)"),
-    ({"decel": 0.0}, r"axis x: decel = 0 is not allowed \(allowed: > 0 pulses/s\^2\)"),
+    ({"decel": 0.0}, r"axis x: decel = 0.0 is not allowed \(allowed: > 0 pulses/s\^2\)"),
     ({"decel": "fast"}, r"decel = 'fast' is not allowed \(allowed: a finite number\)"),
 ])
 def test_bad_axis_parameters_are_refused(fields: dict[str, object], message: str) -> None:

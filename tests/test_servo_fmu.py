@@ -258,6 +258,8 @@ def test_python_parameters_refuse_what_the_fmu_refuses() -> None:
         ServoParameters(inertia=-1e-5)
     with pytest.raises(ConfigurationError, match="counts_per_rev = 1002"):
         ServoParameters(counts_per_rev=1002)
+    with pytest.raises(ConfigurationError, match=r"^ServoParameters: viscous_friction = nan is not allowed"):
+        ServoParameters(viscous_friction=float("nan"))
     with pytest.raises(ConfigurationError, match="not Servo parameters: inertial"):
         ServoParameters.from_mapping({"inertial": 1.0})
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from fractions import Fraction
+
 import pytest
 
 from cosim.controllers.trio import TrioController, TrioProcess
@@ -61,7 +63,54 @@ def test_bad_input_from_python_raises_the_same_message(statement: str, call: obj
     ({"n_axes": 2}, r"n_axes = 2 is not allowed \(allowed: 4..64\)"),
     ({"table_size": 0}, r"table_size = 0 is not allowed \(allowed: >= 1 entries\)"),
     ({"servo_period_us": 750}, r"SERVO_PERIOD = 750 is not allowed"),
+    ({"servo_period_us": float("nan")}, r"SERVO_PERIOD = nan is not allowed \(allowed: a finite number\)"),
+    ({"encoder_at_atype": 2**29}, r"encoder_at_atype = 536870912 is not allowed \(allowed: 0..536870911"),
 ])
 def test_bad_controller_configuration(kwargs: dict[str, int], message: str) -> None:
     with pytest.raises(ConfigurationError, match=message):
         TrioController(Simulation(), **kwargs)  # type: ignore[arg-type]
+
+
+#: Non-finite and absurdly large numbers (issue 22): a clear error at once, never a crash or a hang.
+FINITE = r"\(allowed: a finite number\)"
+HUGE = r"\(allowed: a finite number of magnitude <= 1e300\)"
+HUGE_IN_BASIC = [
+    ("PWM_MARK=1e5000", rf"number = '1e5000' is not allowed {HUGE}"),
+    ("TABLE(0,1e400)", rf"number = '1e400' is not allowed {HUGE}"),
+    ("VR(0)=1e99999999", rf"number = '1e99999999' is not allowed {HUGE}"),
+    ("TABLE(0,1e300*1e300)", rf"TABLE\(0\) = 1e\+600 is not allowed {HUGE}"),
+    ("PWM_MARK=1e300*1e300", r"PWM_MARK = 1e\+600 is not allowed \(allowed: integer 0..65535\)"),
+]
+
+
+@pytest.mark.parametrize(("statement", "message"), HUGE_IN_BASIC, ids=[b[0] for b in HUGE_IN_BASIC])
+def test_huge_numbers_in_a_program_are_refused_at_their_line(statement: str, message: str) -> None:
+    sim = Simulation(seed=1)
+    BasicProgram.parse(f"BASE(3)\nATYPE=35\n{statement}\n", name="job.bas").start(TrioController(sim))
+    with pytest.raises(ConfigurationError, match=rf"^job.bas line 3: {message}$"):
+        sim.run(until=1000)
+
+
+NON_FINITE_FROM_PYTHON = [
+    ("PWM_MARK inf", lambda p: p.set("PWM_MARK", float("inf")), rf"PWM_MARK = inf is not allowed {FINITE}"),
+    ("PWM_MARK 1e5000", lambda p: p.set("PWM_MARK", 10**5000),
+     r"PWM_MARK = 1e\+5000 is not allowed \(allowed: integer 0..65535\)"),
+    ("UNITS nan", lambda p: p.set("UNITS", float("nan")), rf"UNITS = nan is not allowed {FINITE}"),
+    ("SERVO nan", lambda p: p.set("SERVO", float("nan")),
+     r"SERVO = nan is not allowed \(allowed: ON/OFF \(1, 0 or TRUE = -1\)\)"),
+    ("TABLE nan", lambda p: p.table(0, float("nan")), rf"TABLE\(0\) = nan is not allowed {FINITE}"),
+    ("TABLE 1e400", lambda p: p.table(0, Fraction(10**400)), rf"TABLE\(0\) = 1e\+400 is not allowed {HUGE}"),
+    ("MOVE -inf", lambda p: p.move(float("-inf")), rf"MOVE value = -inf is not allowed {FINITE}"),
+    ("WA nan", lambda p: p.wa(float("nan")), rf"WA time = nan is not allowed {FINITE}"),
+    ("PWM_CONTROL(2) nan", lambda p: p.pwm_control(2, float("nan"), 0, 100, 3),
+     rf"PWM_CONTROL\(2\) multiplier = nan is not allowed {FINITE}"),
+]
+
+
+@pytest.mark.parametrize(("case", "call", "message"), NON_FINITE_FROM_PYTHON,
+                         ids=[b[0] for b in NON_FINITE_FROM_PYTHON])
+def test_non_finite_and_huge_values_from_python_are_refused(case: str, call: object, message: str) -> None:
+    p = TrioProcess(TrioController(Simulation(seed=1)), base=(3,))
+    p.set("ATYPE", 35)
+    with pytest.raises(ConfigurationError, match=rf"^{message}$"):
+        call(p)  # type: ignore[operator]

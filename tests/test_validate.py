@@ -75,3 +75,47 @@ def test_positive_finite_flag_and_choice() -> None:
         validate.choice("wifi", "link", ("usb", "ethernet"))
     with pytest.raises(ConfigurationError, match=r"polarity = True"):
         validate.choice(True, "polarity", (0, 1))
+
+
+def test_integer_can_say_what_kind_of_value_it_wants_apart_from_the_range() -> None:
+    kind = "an integer number of ticks"
+    with pytest.raises(ConfigurationError, match=r"^w = 1\.5 is not allowed \(allowed: an integer number of ticks\)$"):
+        validate.integer(1.5, "w", low=1, unit="ticks", kind=kind)
+    with pytest.raises(ConfigurationError, match=r"^w = 0 is not allowed \(allowed: >= 1 ticks\)$"):
+        validate.integer(0, "w", low=1, unit="ticks", kind=kind)
+
+
+def test_whole_numbers_beyond_the_magnitude_bound_are_refused_by_their_range() -> None:
+    with pytest.raises(ConfigurationError, match=r"^PWM_MARK = 1e\+600 is not allowed \(allowed: 0\.\.65535\)$"):
+        validate.integer(Fraction(10**600), "PWM_MARK", low=0, high=65535, whole=True)
+
+
+@pytest.mark.parametrize(("value", "text"), [
+    (10**5000, "1e+5000"), (-(10**5000), "-1e+5000"), (Fraction(10**400, 3), "3.33333e+399"), (10**30, str(10**30)),
+    (Fraction(10**2000 + 1, 10**2000), "about 1.0"), (np.int64(7), "7"), (np.float64(0.5), "0.5"),
+], ids=["1e5000", "-1e5000", "1e400/3", "1e30", "1+1e-2000", "np.int64", "np.float64"])
+def test_shown_keeps_huge_and_numpy_values_readable(value: object, text: str) -> None:
+    assert repr(validate.shown(value)) == text
+
+
+def test_in_range_shows_the_value_as_it_was_given() -> None:
+    with pytest.raises(ConfigurationError, match=r"^inertia = 0\.0 is not allowed \(allowed: > 0\)$"):
+        validate.positive(0.0, "inertia")
+    with pytest.raises(ConfigurationError, match=r"^x = 1e\+5000 is not allowed \(allowed: a finite number of magni"):
+        validate.exact(10**5000, "x")
+
+
+def test_flag_takes_the_values_a_controller_language_has_for_yes() -> None:
+    on_off = {"true": (1, -1), "allowed": "ON/OFF (1, 0 or TRUE = -1)"}
+    assert [validate.flag(v, "SERVO", **on_off) for v in (Fraction(1), -1, 0.0, True)] == [True, True, False, True]
+    for bad in (2, float("nan"), "1"):
+        with pytest.raises(ConfigurationError, match=r"SERVO = .* is not allowed \(allowed: ON/OFF \(1, 0 or TRUE"):
+            validate.flag(bad, "SERVO", **on_off)
+    with pytest.raises(ConfigurationError, match=r"enabled = -1 is not allowed"):
+        validate.flag(-1, "enabled")
+
+
+def test_choice_returns_the_option_itself() -> None:
+    number = validate.choice(Fraction(35), "ATYPE", (0, 35))
+    assert number == 35 and type(number) is int
+    assert validate.choice("ms", "unit", ("s", "ms")) == "ms"

@@ -1,4 +1,4 @@
-"""What every check shares: naming, the empty-signal rule, reading signals, checking parameters.
+"""What every check shares: naming, the empty-signal rule, reading signals (parameters: :mod:`cosim.validate`).
 
 A check is a frozen dataclass whose :meth:`Check.evaluate` reads a :class:`~cosim.trace.Trace`
 and nothing else. Parameters are integer ticks of the trace's time base; results report instants
@@ -8,9 +8,8 @@ and durations in ns (see :class:`Clock`).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from decimal import Decimal, InvalidOperation
 from fractions import Fraction
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
@@ -25,6 +24,8 @@ if TYPE_CHECKING:
 Ints = npt.NDArray[np.int64]
 Floats = npt.NDArray[np.float64]
 VALUE_KINDS = ("bit", "int", "real")
+#: What a tick parameter must be, as messages say it (``cosim.validate.integer(..., kind=TICKS)``).
+TICKS = "an integer number of ticks"
 
 
 @dataclass(frozen=True)
@@ -172,59 +173,6 @@ def trace_end(trace: Trace, *times: Ints) -> int:
     """The end of the trace: its recorded end or the last recorded instant, whichever is later."""
     last = [int(t[-1]) for t in times if t.size]
     return max([trace.end_t, *last])
-
-
-# -- checking parameters -----------------------------------------------------------------------
-class Located(Protocol):
-    """Anything that can say where a bad parameter is (a check or a reference)."""
-
-    @property
-    def where(self) -> str: ...
-
-
-def require_ticks(check: Located, name: str, value: object, *, minimum: int | None = 0) -> None:
-    """An integer tick count (not a float), at least ``minimum``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise ConfigurationError.out_of_range(name, value, "an integer number of ticks", where=check.where)
-    if minimum is not None and value < minimum:
-        raise ConfigurationError.out_of_range(name, value, f">= {minimum} ticks", where=check.where)
-
-
-def require_int(check: Located, name: str, value: object, *, minimum: int | None = None,
-                allowed: tuple[int, ...] | None = None) -> None:
-    """An integer (counts, levels), optionally at least ``minimum`` or one of ``allowed``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        raise ConfigurationError.out_of_range(name, value, "an integer", where=check.where)
-    if minimum is not None and value < minimum:
-        raise ConfigurationError.out_of_range(name, value, f">= {minimum}", where=check.where)
-    if allowed is not None and value not in allowed:
-        raise ConfigurationError.out_of_range(name, value, ", ".join(map(str, allowed)), where=check.where)
-
-
-def require_number(check: Located, name: str, value: object) -> float:
-    """A finite real number (bounds, thresholds, expected values)."""
-    if isinstance(value, bool) or not isinstance(value, int | float | Fraction | np.integer | np.floating):
-        raise ConfigurationError.out_of_range(name, value, "a finite number", where=check.where)
-    if not np.isfinite(float(value)):
-        raise ConfigurationError.out_of_range(name, value, "a finite number", where=check.where)
-    return float(value)
-
-
-def exact_positive(check: Located, name: str, value: object) -> Fraction:
-    """A positive number as an exact Fraction (a float is taken as the decimal it prints as)."""
-    require_number(check, name, value)
-    try:
-        if isinstance(value, Fraction):
-            exact = value
-        elif isinstance(value, int | np.integer):
-            exact = Fraction(int(value))
-        else:
-            exact = Fraction(Decimal(str(value)))
-    except (InvalidOperation, ValueError):  # pragma: no cover - require_number lets only numbers through
-        raise ConfigurationError.out_of_range(name, value, "a positive number", where=check.where) from None
-    if exact <= 0:
-        raise ConfigurationError.out_of_range(name, value, "> 0", where=check.where)
-    return exact
 
 
 def as_number(x: float | np.integer | np.floating) -> Number:

@@ -12,7 +12,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cosim import validate
 from cosim.checks.base import (
+    TICKS,
     Check,
     Clock,
     Findings,
@@ -21,8 +23,6 @@ from cosim.checks.base import (
     held_index,
     pulse_times,
     records,
-    require_int,
-    require_ticks,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
 
@@ -66,8 +66,9 @@ class DirectionSetup(Check):
     positive_level: int = 1
 
     def __post_init__(self) -> None:
-        require_ticks(self, "setup", self.setup, minimum=0)
-        require_int(self, "positive_level", self.positive_level, allowed=(0, 1))
+        validate.integer(self.setup, "setup", low=0, unit="ticks", kind=TICKS, where=self.where)
+        validate.integer(self.positive_level, "positive_level", low=0, high=1, allowed="0, 1", kind="an integer",
+                         where=self.where)
 
     @property
     def main_signal(self) -> str:

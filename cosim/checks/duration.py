@@ -14,7 +14,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cosim import validate
 from cosim.checks.base import (
+    TICKS,
     Check,
     Clock,
     Findings,
@@ -23,8 +25,6 @@ from cosim.checks.base import (
     fmt,
     pulse_times,
     records,
-    require_number,
-    require_ticks,
     trace_end,
 )
 from cosim.checks.result import MAX_REPORTED, Number, Violation
@@ -59,10 +59,9 @@ class EdgeRef:
     which: str = "each"
 
     def __post_init__(self) -> None:
-        if self.which not in WHICH:
-            raise ConfigurationError.out_of_range("which", self.which, ", ".join(WHICH), where=str(self))
-        if self.value is not None:
-            require_number(self, "value", self.value)
+        if self.value is not None:  # first: str(self) shows the value as a float
+            validate.finite(self.value, "value", where=f"change of {self.signal}")
+        validate.choice(self.which, "which", WHICH, where=str(self))
 
     def instants(self, trace: Trace, check: Check) -> Ints:
         """Every matching change [ticks], in time order."""
@@ -94,8 +93,7 @@ class PulseRef:
     which: str = "first"
 
     def __post_init__(self) -> None:
-        if self.which not in WHICH:
-            raise ConfigurationError.out_of_range("which", self.which, ", ".join(WHICH), where=str(self))
+        validate.choice(self.which, "which", WHICH, where=str(self))
 
     def instants(self, trace: Trace, check: Check) -> Ints:
         """Every pulse [ticks], in time order."""
@@ -165,10 +163,10 @@ class Duration(Check):
             raise ConfigurationError(f"{self.where}: equals (with tol) excludes min and max")
         for name in ("min", "max", "equals"):
             if getattr(self, name) is not None:
-                require_ticks(self, name, getattr(self, name), minimum=0)
-        require_ticks(self, "tol", self.tol, minimum=0)
-        if self.min is not None and self.max is not None and self.min > self.max:
-            raise ConfigurationError.out_of_range("min", self.min, f"<= max ({self.max})", where=self.where)
+                validate.integer(getattr(self, name), name, low=0, unit="ticks", kind=TICKS, where=self.where)
+        validate.integer(self.tol, "tol", low=0, unit="ticks", kind=TICKS, where=self.where)
+        if self.min is not None and self.max is not None:
+            validate.integer(self.min, "min", high=self.max, allowed=f"<= max ({self.max})", where=self.where)
 
     @property
     def main_signal(self) -> str:

@@ -13,7 +13,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cosim import validate
 from cosim.checks.base import (
+    TICKS,
     Check,
     Clock,
     Findings,
@@ -23,8 +25,6 @@ from cosim.checks.base import (
     held_index,
     pulse_times,
     records,
-    require_int,
-    require_ticks,
     signed_position,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
@@ -86,19 +86,20 @@ class EdgeAtPosition(Check):
     def __post_init__(self) -> None:
         object.__setattr__(self, "expected", tuple((p, v) for p, v in self.expected))
         for k, (position, value) in enumerate(self.expected):
-            require_int(self, f"expected[{k}] position", position)
-            require_int(self, f"expected[{k}] value", value, allowed=(0, 1))
-        require_int(self, "tol_counts", self.tol_counts, minimum=0)
+            validate.integer(position, f"expected[{k}] position", where=self.where)
+            validate.integer(value, f"expected[{k}] value", low=0, high=1, allowed="0, 1", kind="an integer",
+                             where=self.where)
+        validate.integer(self.tol_counts, "tol_counts", low=0, kind="an integer", where=self.where)
         if (self.times is None) != (self.tol_time is None):
             raise ConfigurationError(f"{self.where}: times and tol_time go together; give both or neither")
         if self.times is not None and self.tol_time is not None:
             object.__setattr__(self, "times", tuple(self.times))
-            require_ticks(self, "tol_time", self.tol_time, minimum=0)
-            if len(self.times) != len(self.expected):
-                raise ConfigurationError.out_of_range("len(times)", len(self.times),
-                                                      f"{len(self.expected)} (one per expected edge)", where=self.where)
+            validate.integer(self.tol_time, "tol_time", low=0, unit="ticks", kind=TICKS, where=self.where)
+            n = len(self.expected)
+            validate.integer(len(self.times), "len(times)", low=n, high=n, allowed=f"{n} (one per expected edge)",
+                             where=self.where)
             for k, t in enumerate(self.times):
-                require_ticks(self, f"times[{k}]", t, minimum=None)
+                validate.integer(t, f"times[{k}]", unit="ticks", kind=TICKS, where=self.where)
 
     def _positions(self, trace: Trace, t_edges: np.ndarray) -> np.ndarray:
         info = trace.info.get(self.position_signal)

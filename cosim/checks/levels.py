@@ -12,7 +12,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from cosim import validate
 from cosim.checks.base import (
+    TICKS,
     Check,
     Clock,
     Findings,
@@ -21,8 +23,6 @@ from cosim.checks.base import (
     held_index,
     pulse_times,
     records,
-    require_number,
-    require_ticks,
     signed_position,
     trace_end,
 )
@@ -57,10 +57,10 @@ class Bound(Check):
     def __post_init__(self) -> None:
         if self.lower is None and self.upper is None:
             raise ConfigurationError(f"{self.where}: give lower, upper or both")
-        lo = None if self.lower is None else require_number(self, "lower", self.lower)
-        hi = None if self.upper is None else require_number(self, "upper", self.upper)
-        if lo is not None and hi is not None and lo > hi:
-            raise ConfigurationError.out_of_range("lower", self.lower, f"<= upper ({self.upper})", where=self.where)
+        lo = None if self.lower is None else validate.finite(self.lower, "lower", where=self.where)
+        hi = None if self.upper is None else validate.finite(self.upper, "upper", where=self.where)
+        if lo is not None and hi is not None:
+            validate.in_range(self.lower, "lower", high=hi, allowed=f"<= upper ({self.upper})", where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         t, v = records(trace, self.signal, self)
@@ -141,15 +141,15 @@ class _Intervals(Check):
 
     def _check_options(self, threshold: float, max_duration: int | None, start: int | None,
                        until: int | None) -> None:
-        require_number(self, "threshold", threshold)
+        validate.finite(threshold, "threshold", where=self.where)
         if max_duration is not None:
-            require_ticks(self, "max_duration", max_duration, minimum=0)
+            validate.integer(max_duration, "max_duration", low=0, unit="ticks", kind=TICKS, where=self.where)
         if start is not None:
-            require_ticks(self, "start", start, minimum=None)
+            validate.integer(start, "start", unit="ticks", kind=TICKS, where=self.where)
         if until is not None:
-            require_ticks(self, "until", until, minimum=None)
-        if start is not None and until is not None and start >= until:
-            raise ConfigurationError.out_of_range("start", start, f"< until ({until})", where=self.where)
+            validate.integer(until, "until", unit="ticks", kind=TICKS, where=self.where)
+        if start is not None and until is not None:
+            validate.integer(start, "start", high=until - 1, allowed=f"< until ({until})", where=self.where)
 
 
 @dataclass(frozen=True)
@@ -284,10 +284,9 @@ class ValueAt(Check):
 
     def __post_init__(self) -> None:
         if self.t is not None:
-            require_ticks(self, "t", self.t, minimum=None)
-        require_number(self, "expected", self.expected)
-        if require_number(self, "tol", self.tol) < 0:
-            raise ConfigurationError.out_of_range("tol", self.tol, ">= 0", where=self.where)
+            validate.integer(self.t, "t", unit="ticks", kind=TICKS, where=self.where)
+        validate.finite(self.expected, "expected", where=self.where)
+        validate.positive(self.tol, "tol", zero=True, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         info = trace.info.get(self.signal)

@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from cosim.checks.base import Check, Clock, Findings, exact_positive, fmt, pulse_times, require_int, require_ticks
+from cosim import validate
+from cosim.checks.base import TICKS, Check, Clock, Findings, fmt, pulse_times
 from cosim.checks.result import MAX_REPORTED, Number, Violation
 
 if TYPE_CHECKING:
@@ -62,7 +63,7 @@ class MinPulseSpacing(Check):
     min_spacing: int
 
     def __post_init__(self) -> None:
-        require_ticks(self, "min_spacing", self.min_spacing, minimum=1)
+        validate.integer(self.min_spacing, "min_spacing", low=1, unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         t, _ = pulse_times(trace, self.signal, self)
@@ -110,13 +111,13 @@ class MaxPulseRate(Check):
     window: int | None = None
 
     def __post_init__(self) -> None:
-        exact_positive(self, "max_rate_hz", self.max_rate_hz)
+        validate.positive(self.max_rate_hz, "max_rate_hz", where=self.where)
         if self.window is not None:
-            require_ticks(self, "window", self.window, minimum=1)
+            validate.integer(self.window, "window", low=1, unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         t, _ = pulse_times(trace, self.signal, self)
-        rate = exact_positive(self, "max_rate_hz", self.max_rate_hz)
+        rate = validate.positive(self.max_rate_hz, "max_rate_hz", where=self.where)
         limit = _number(rate)
         if self.window is None:
             return self._instantaneous(t, rate, limit, clock)
@@ -187,9 +188,9 @@ class PulsesPerWindow(Check):
     start: int = 0
 
     def __post_init__(self) -> None:
-        require_int(self, "max_count", self.max_count, minimum=0)
-        require_ticks(self, "window", self.window, minimum=1)
-        require_ticks(self, "start", self.start, minimum=None)
+        validate.integer(self.max_count, "max_count", low=0, kind="an integer", where=self.where)
+        validate.integer(self.window, "window", low=1, unit="ticks", kind=TICKS, where=self.where)
+        validate.integer(self.start, "start", unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         t, _ = pulse_times(trace, self.signal, self)

@@ -30,8 +30,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from cosim import validate
 from cosim.errors import ConfigurationError
-from cosim.plants.params import from_mapping, require_finite
+from cosim.plants.params import from_mapping
 
 #: FMU parameters that only steer the FMU's solver.
 _FMU_ONLY = frozenset({"max_step"})
@@ -75,11 +76,14 @@ class ConveyorParameters:
 
     def __post_init__(self) -> None:
         where = "ConveyorParameters"
-        require_finite(self, ("tau_drive", "counts_per_metre", "mark_pitch", "mark_length"), positive=True, where=where)
-        require_finite(self, ("ripple_amplitude", "ripple_frequency"), positive=False, where=where)
-        if not self.mark_pitch > self.mark_length:
-            raise ConfigurationError.out_of_range("mark_pitch", self.mark_pitch,
-                                                  f"> mark_length = {self.mark_length!r}", where=where)
+        for name in ("tau_drive", "counts_per_metre", "mark_pitch", "mark_length"):
+            validate.positive(getattr(self, name), name, where=where)
+        for name in ("ripple_amplitude", "ripple_frequency"):
+            validate.positive(getattr(self, name), name, zero=True, where=where)
+        for name in ("mark_offset", "ripple_phase", "speed_start", "position_start"):
+            validate.finite(getattr(self, name), name, where=where)
+        validate.in_range(self.mark_pitch, "mark_pitch", low=self.mark_length, low_open=True,
+                          allowed=f"> mark_length = {self.mark_length!r}", where=where)
 
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> ConveyorParameters:

@@ -1,23 +1,17 @@
-"""Checks shared by the plants' parameter records (the Python companions of the FMU parameters)."""
+"""What the plants' parameter records share (the Python companions of the FMU parameters).
+
+Their values are checked with :mod:`cosim.validate` in each record's ``__post_init__``.
+"""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import fields
 from typing import Any, TypeVar
 
 from cosim.errors import ConfigurationError
 
 T = TypeVar("T")
-
-
-def require_finite(record: object, names: Iterable[str], *, positive: bool, where: str) -> None:
-    """Refuse a field of ``record`` that is not finite and ``> 0`` (``positive``) or ``>= 0``."""
-    for name in names:
-        value = getattr(record, name)
-        if not (math.isfinite(value) and (value > 0 if positive else value >= 0)):
-            raise ConfigurationError.out_of_range(name, value, "> 0" if positive else ">= 0", where=where)
 
 
 def from_mapping(cls: type[T], values: Mapping[str, Any], *, model: str, solver_only: frozenset[str]) -> T:

@@ -27,8 +27,9 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from cosim import validate
 from cosim.errors import ConfigurationError
-from cosim.plants.params import from_mapping, require_finite
+from cosim.plants.params import from_mapping
 
 #: FMU parameters that only steer the FMU's solver or start state, not the motor.
 _FMU_ONLY = frozenset({"angle_start", "max_step"})
@@ -80,11 +81,15 @@ class ServoParameters:
         where = "ServoParameters"
         positive = ("resistance", "inductance", "torque_constant", "back_emf_constant", "inertia",
                     "amplifier_gain", "supply_voltage")
-        require_finite(self, positive, positive=True, where=where)
-        require_finite(self, ("viscous_friction", "coulomb_friction"), positive=False, where=where)
-        if self.counts_per_rev <= 0 or self.counts_per_rev % 4:
-            raise ConfigurationError.out_of_range("counts_per_rev", self.counts_per_rev,
-                                                  "a positive multiple of 4", where=where)
+        for name in positive:
+            validate.positive(getattr(self, name), name, where=where)
+        for name in ("viscous_friction", "coulomb_friction"):
+            validate.positive(getattr(self, name), name, zero=True, where=where)
+        multiple = "a positive multiple of 4"
+        counts = validate.integer(self.counts_per_rev, "counts_per_rev", low=4, allowed=multiple, where=where,
+                                  whole=True)
+        if counts % 4:
+            raise ConfigurationError.out_of_range("counts_per_rev", self.counts_per_rev, multiple, where=where)
 
     @classmethod
     def from_mapping(cls, values: Mapping[str, Any]) -> ServoParameters:

@@ -22,6 +22,7 @@ from fractions import Fraction
 from functools import cache
 from typing import Any, Protocol
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 from cosim.timebase import TimeBase
 
@@ -83,13 +84,14 @@ class StepperParameters:
     current_tau: float = 20.0e-6
 
     def __post_init__(self) -> None:
-        if self.steps_per_rev <= 0 or self.steps_per_rev % 4:
-            raise ConfigurationError.out_of_range("steps_per_rev", self.steps_per_rev, "a positive multiple of 4")
-        if self.microsteps not in SUPPORTED_MICROSTEPS:
-            raise ConfigurationError.out_of_range("microsteps", self.microsteps,
-                                                  ", ".join(map(str, SUPPORTED_MICROSTEPS)))
-        if not self.rotor_inertia > 0:
-            raise ConfigurationError.out_of_range("rotor_inertia", self.rotor_inertia, "> 0 kg.m2")
+        where, multiple = "StepperParameters", "a positive multiple of 4"
+        if validate.integer(self.steps_per_rev, "steps_per_rev", low=4, allowed=multiple, where=where, whole=True) % 4:
+            raise ConfigurationError.out_of_range("steps_per_rev", self.steps_per_rev, multiple, where=where)
+        validate.choice(self.microsteps, "microsteps", SUPPORTED_MICROSTEPS, where=where)
+        validate.positive(self.rotor_inertia, "rotor_inertia", unit="kg.m2", where=where)
+        for f in fields(self):
+            if f.type == "float":
+                validate.finite(getattr(self, f.name), f.name, where=where)
 
     @classmethod
     def from_parameters(cls, parameters: Mapping[str, Any] | None = None) -> StepperParameters:
@@ -203,8 +205,7 @@ def pulse_instants(t_start_s: Fraction, t_end_s: Fraction, *, rate_hz: Fraction,
     >>> [str(t) for t in pulse_instants(Fraction(0), Fraction(1, 1000), rate_hz=Fraction(3000), phase=Fraction(1, 2))]
     ['1/6000', '1/2000', '1/1200']
     """
-    if not 0 <= phase < 1:
-        raise ConfigurationError.out_of_range("phase", phase, "0 <= phase < 1")
+    validate.in_range(phase, "phase", low=0, high=1, high_open=True, allowed="0 <= phase < 1")
     if rate_hz == 0 or t_end_s <= t_start_s:
         return []
     period = 1 / abs(rate_hz)
@@ -249,8 +250,8 @@ def trapezoid_rates(top_hz: int, *, ramp_slots: int, hold_slots: int,
     >>> [int(r) for r in trapezoid_rates(3000, ramp_slots=3, hold_slots=2)]
     [1000, 2000, 3000, 3000, 3000, 2000, 1000]
     """
-    if ramp_slots < 1 or hold_slots < 0:
-        raise ConfigurationError.out_of_range("ramp_slots, hold_slots", (ramp_slots, hold_slots), ">= 1, >= 0")
+    validate.integer(ramp_slots, "ramp_slots", low=1)
+    validate.integer(hold_slots, "hold_slots", low=0)
     up = [Fraction(top_hz * (k + 1), ramp_slots) for k in range(ramp_slots)]
     return up + [Fraction(top_hz)] * hold_slots + (up[::-1][1:] if down else [])
 
@@ -287,8 +288,7 @@ def drive_slots(fmu: _SteppedFmu, rates_hz: Sequence[Fraction], *, slot_ns: int 
             pulses = drive_slots(fmu, trapezoid_rates(16_000, ramp_slots=100, hold_slots=50))
             print(pulses, fmu.get("lost_full_steps"))
     """
-    if slot_ns < 1:
-        raise ConfigurationError.out_of_range("slot_ns", slot_ns, ">= 1 tick")
+    validate.integer(slot_ns, "slot_ns", low=1, unit="tick")
     t0, slot_s = fmu.t, slot_ns * fmu.timebase.resolution_s
     phase, count = Fraction(0), 0
     for k, rate in enumerate(rates_hz):

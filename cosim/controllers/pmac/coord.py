@@ -27,8 +27,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol
 
+from cosim import validate
 from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner
-from cosim.controllers.pmac.units import IX94_DEFAULT, IX94_MAX, REG_MAX, check_int, hexaddr, percent
+from cosim.controllers.pmac.units import IX94_ALLOWED, IX94_DEFAULT, IX94_MAX, REG_MAX, hexaddr, percent
 from cosim.errors import ConfigurationError
 from cosim.signals import Signal
 
@@ -76,10 +77,8 @@ class PercentRegister:
 
     def command(self, pct: int | Fraction) -> int:
         """``%n``: write ``round(n * I10 / 100)``, saturated at 8,388,607 (the largest implementable)."""
-        exact = Fraction(pct)
-        if exact < 0:
-            raise ConfigurationError.out_of_range("%n (feedrate override)", pct,
-                                                  f">= 0 (up to {self.max_percent():.2f})")
+        exact = validate.positive(pct, "%n (feedrate override)", zero=True,
+                                  allowed=f">= 0 (up to {self.max_percent():.2f})")
         self.value = min(REG_MAX, round(exact * self.i10 / 100))
         return self.value
 
@@ -129,10 +128,10 @@ class CoordinateSystem:
 
     def __init__(self, sim: Simulation, number: int, *, i10: int, axes: Iterable[str] = ("X",),
                  ix94: int = IX94_DEFAULT, device: str = "pmac") -> None:
-        self.number = check_int("coordinate system number", number, 1, 8)
+        self.number = validate.integer(number, "coordinate system number", low=1, high=8, allowed="integers 1..8")
         self.sim = sim
         self.i10 = i10
-        self.ix94 = check_int(f"I{number}94 (Ix94)", ix94, 0, IX94_MAX)
+        self.ix94 = validate.integer(ix94, f"I{number}94 (Ix94)", low=0, high=IX94_MAX, allowed=IX94_ALLOWED)
         self.percent_register = PercentRegister(PERCENT_REGISTER_BASE + (number - 1) * 0x100, i10)
         self.ix93 = self.percent_register.address
         self.source: TimeBaseSource = self.percent_register
@@ -168,7 +167,8 @@ class CoordinateSystem:
 
     def set_ix94(self, value: object, *, where: str = "") -> None:
         """Set Ix94 (0..8,388,607)."""
-        self.ix94 = check_int(f"I{self.number}94 (Ix94)", value, 0, IX94_MAX, where=where)
+        self.ix94 = validate.integer(value, f"I{self.number}94 (Ix94)", low=0, high=IX94_MAX, where=where,
+                                     allowed=IX94_ALLOWED)
 
     def command_percent(self, pct: int | Fraction) -> int:
         """Host ``%n``; acts only while Ix93 points at this system's ``%`` register."""
@@ -192,7 +192,8 @@ class CoordinateSystem:
 
         It runs under the coordinate system's time base, like a programmed move.
         """
-        self.run_program([LinearMove(target, Fraction(speed_per_ms) * 1000, ta_ms, axis)])
+        speed = validate.exact(speed_per_ms, "jog speed_per_ms (Ixx22)")
+        self.run_program([LinearMove(target, speed * 1000, ta_ms, axis)])
 
     @property
     def program_done(self) -> bool:

@@ -28,8 +28,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
+from cosim import validate
 from cosim.controllers.pmac.encoder import ONE_OVER_T_BITS, TRIGGERED_BITS, EncoderChannel
-from cosim.controllers.pmac.units import REG_MASK, REG_MAX, Reg, check_int, hexaddr, saturate24, wrap24
+from cosim.controllers.pmac.units import REG_MASK, REG_MAX, Reg, hexaddr, saturate24, wrap24
 from cosim.errors import ConfigurationError
 
 #: First line of the Turbo PMAC table (I8000 is Y:$3501).
@@ -53,7 +54,7 @@ def _method_text() -> str:
 
 def check_scale_factor(value: object, *, name: str = "SCALE_FACTOR", where: str = "") -> int:
     """A SCALE_FACTOR must be an integer 1..8,388,607 (a positive 24-bit word)."""
-    return check_int(name, value, 1, REG_MAX, where=where)
+    return validate.integer(value, name, low=1, high=REG_MAX, where=where, allowed=f"integers 1..{REG_MAX}")
 
 
 class Entry:

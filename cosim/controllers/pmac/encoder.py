@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from cosim import validate
 from cosim.controllers.pmac.units import REG_MASK
 from cosim.encoders import EncoderSource, extend_one_over_t
 from cosim.errors import ConfigurationError
@@ -55,8 +56,7 @@ class EncoderChannel:
 
     def __init__(self, sim: Simulation, address: int, encoder: EncoderSource, *, trigger: Signal | None = None,
                  trigger_level: int = 1, name: str | None = None, device: str = "pmac") -> None:
-        if trigger_level not in (0, 1):
-            raise ConfigurationError.out_of_range("trigger_level", trigger_level, "0 or 1")
+        trigger_level = int(validate.flag(trigger_level, "trigger_level", allowed="0 or 1"))
         self.sim = sim
         self.address = address
         self.encoder = encoder

@@ -30,9 +30,11 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from decimal import Decimal, InvalidOperation
+from fractions import Fraction
 
+from cosim import validate
 from cosim.controllers.pmac.ect import TURBO_ECT_BASE, TURBO_ECT_LINES
-from cosim.controllers.pmac.units import IX94_MAX, REG_MASK, REG_MAX, check_int
+from cosim.controllers.pmac.units import I10_ALLOWED, IX94_ALLOWED, IX94_MAX, REG_MASK, REG_MAX, WORD_ALLOWED
 from cosim.errors import ConfigurationError
 
 ECT_FIRST = 8000
@@ -97,20 +99,23 @@ def check_ivar(number: int, value: object, *, where: str = "") -> int:
     """
     name = f"I{number}"
     if number == 10:
-        return check_int(f"{name} (servo interrupt time)", value, 1, REG_MAX, where=where, unit="(2^-23 ms)")
+        return validate.integer(value, f"{name} (servo interrupt time)", low=1, high=REG_MAX, where=where,
+                                allowed=I10_ALLOWED)
     cs = cs_ivar(number)
     if cs is not None:
         if cs[1] == 94:
-            return check_int(f"{name} (Ix94, time-base slew limit)", value, 0, IX94_MAX, where=where,
-                             unit="(2^-23 ms per servo cycle)")
-        return check_int(f"{name} (Ix93, time-base source address)", value, 0, REG_MASK, where=where)
+            return validate.integer(value, f"{name} (Ix94, time-base slew limit)", low=0, high=IX94_MAX, where=where,
+                                    allowed=IX94_ALLOWED)
+        return validate.integer(value, f"{name} (Ix93, time-base source address)", low=0, high=REG_MASK,
+                                where=where, allowed=WORD_ALLOWED)
     if ECT_FIRST <= number <= ECT_LAST:
-        return check_int(f"{name} (conversion table line)", value, 0, REG_MASK, where=where)
+        return validate.integer(value, f"{name} (conversion table line)", low=0, high=REG_MASK, where=where,
+                                allowed=WORD_ALLOWED)
     prefix = f"{where}: " if where else ""
     raise ConfigurationError(f"{prefix}{name} is not an I-variable this model knows (known: {_KNOWN})")
 
 
-def _parse_value(text: str, name: str, where: str) -> int:
+def _parse_value(text: str, name: str, where: str) -> int | Fraction:
     if text.startswith("$"):
         try:
             return int(text[1:], 16)
@@ -124,13 +129,12 @@ def _parse_value(text: str, name: str, where: str) -> int:
                                               f"@I{ECT_FIRST}..@I{ECT_LAST}", where=where)
     else:
         try:
-            exact = Decimal(text)
+            Decimal(text)
         except InvalidOperation:
             pass
-        else:
-            if exact == exact.to_integral_value():
-                return int(exact)
-            check_ivar(int(name[1:]), exact, where=where)  # raises: not an integer
+        else:  # a number, finite and of sane size (else refused here), checked against the range by check_ivar
+            number = validate.exact(text, name, where=where)
+            return number.numerator if number.denominator == 1 else number
     raise ConfigurationError(f"{where}: {name} = {text!r} is not a number (write decimal, $hex or @In)")
 
 

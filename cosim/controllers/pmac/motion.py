@@ -23,16 +23,11 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from fractions import Fraction
 
+from cosim import validate
 from cosim.controllers.pmac.units import UNITS_PER_MS
 from cosim.errors import ConfigurationError
 
 Number = int | Fraction
-
-
-def _exact(name: str, value: object) -> Fraction:
-    if isinstance(value, bool) or not isinstance(value, int | Fraction):
-        raise ConfigurationError.out_of_range(name, value, "an int or Fraction (exact values; no floats)")
-    return Fraction(value)
 
 
 @dataclass(frozen=True)
@@ -42,7 +37,7 @@ class LinearMove:
     Parameters
     ----------
     target : int or Fraction
-        End position [axis units].
+        End position [axis units] (a float is taken as the decimal it prints as, see :mod:`cosim.validate`).
     feedrate : int or Fraction
         F [axis units/s] (Ix90 = 1000 ms), > 0.
     ta_ms : int or Fraction
@@ -57,11 +52,9 @@ class LinearMove:
     axis: str = "X"
 
     def __post_init__(self) -> None:
-        _exact("target", self.target)
-        if _exact("F (feedrate)", self.feedrate) <= 0:
-            raise ConfigurationError.out_of_range("F (feedrate)", self.feedrate, "> 0 axis units/s")
-        if _exact("TA (ta_ms)", self.ta_ms) < 0:
-            raise ConfigurationError.out_of_range("TA (ta_ms)", self.ta_ms, ">= 0 ms")
+        object.__setattr__(self, "target", validate.exact(self.target, "target"))
+        object.__setattr__(self, "feedrate", validate.positive(self.feedrate, "F (feedrate)", unit="axis units/s"))
+        object.__setattr__(self, "ta_ms", validate.positive(self.ta_ms, "TA (ta_ms)", unit="ms", zero=True))
 
 
 @dataclass(frozen=True)
@@ -71,8 +64,7 @@ class Delay:
     ms: Number
 
     def __post_init__(self) -> None:
-        if _exact("DELAY time", self.ms) < 0:
-            raise ConfigurationError.out_of_range("DELAY time", self.ms, ">= 0 ms")
+        object.__setattr__(self, "ms", validate.positive(self.ms, "DELAY time", unit="ms", zero=True))
 
 
 @dataclass(frozen=True)
@@ -82,8 +74,7 @@ class Dwell:
     ms: Number
 
     def __post_init__(self) -> None:
-        if _exact("DWELL time", self.ms) < 0:
-            raise ConfigurationError.out_of_range("DWELL time", self.ms, ">= 0 ms")
+        object.__setattr__(self, "ms", validate.positive(self.ms, "DWELL time", unit="ms", zero=True))
 
 
 Item = LinearMove | Delay | Dwell

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
+from cosim import validate
 from cosim.controllers.pmac.coord import CoordinateSystem
 from cosim.controllers.pmac.servo import PidLoop
 from cosim.errors import ConfigurationError
@@ -55,7 +56,7 @@ class Motor:
         self.number = number
         self.cs = cs
         self.axis = axis
-        self.counts_per_unit = Fraction(counts_per_unit)
+        self.counts_per_unit = validate.exact(counts_per_unit, f"counts_per_unit of motor {number}")
         self.loop = loop
         self.feedback = feedback
         self.cmd = Fraction(0)

@@ -29,7 +29,7 @@ from typing import Any
 import control
 import numpy as np
 
-from cosim.errors import ConfigurationError
+from cosim import validate
 
 #: Largest DAC output [bits] of a 16-bit DAC.
 DAC_MAX = 32767
@@ -53,9 +53,8 @@ class MotorModel:
     tau_s: float
 
     def __post_init__(self) -> None:
-        for name, value in (("gain_counts_per_s_per_bit", self.gain_counts_per_s_per_bit), ("tau_s", self.tau_s)):
-            if not value > 0:
-                raise ConfigurationError.out_of_range(name, value, "> 0")
+        validate.positive(self.gain_counts_per_s_per_bit, "gain_counts_per_s_per_bit")
+        validate.positive(self.tau_s, "tau_s")
 
     def transfer_function(self) -> Any:
         """The continuous plant ``G(s)`` as a python-control transfer function."""
@@ -168,13 +167,12 @@ def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integ
     -------
     PidDesign
     """
+    validate.positive(period_s, "period_s", unit="s")
     rate_hz = 1.0 / period_s
-    if not 0 < bandwidth_hz <= rate_hz / 10:
-        raise ConfigurationError.out_of_range("bandwidth_hz", bandwidth_hz, f"0 < bandwidth <= servo rate / 10 "
-                                              f"= {rate_hz / 10:.1f} Hz")
-    for name, value in (("integral_ratio", integral_ratio), ("derivative_filter_ratio", derivative_filter_ratio)):
-        if not value > 1:
-            raise ConfigurationError.out_of_range(name, value, "> 1")
+    validate.in_range(bandwidth_hz, "bandwidth_hz", low=0, low_open=True, high=rate_hz / 10,
+                      allowed=f"0 < bandwidth <= servo rate / 10 = {rate_hz / 10:.1f} Hz")
+    validate.in_range(integral_ratio, "integral_ratio", low=1, low_open=True)
+    validate.in_range(derivative_filter_ratio, "derivative_filter_ratio", low=1, low_open=True)
     wc = 2 * math.pi * bandwidth_hz
     wi = wc / integral_ratio
     wf = min(derivative_filter_ratio * wc, math.pi / period_s / 2)

@@ -31,6 +31,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 
 #: Time units per millisecond (time-base values and I10 are in 2^-23 ms).
@@ -49,6 +50,10 @@ IX94_DEFAULT = 1644
 IX94_MAX = REG_MAX
 #: Nanoseconds per millisecond.
 NS_PER_MS = 10**6
+#: Allowed values of I10, of Ix94 and of a 24-bit setup word, as messages say them.
+I10_ALLOWED = f"integers 1..{REG_MAX} (2^-23 ms)"
+IX94_ALLOWED = f"integers 0..{IX94_MAX} (2^-23 ms per servo cycle)"
+WORD_ALLOWED = f"integers 0..{REG_MASK}"
 
 
 def hexaddr(value: int, digits: int = 4) -> str:
@@ -91,41 +96,6 @@ def saturate24(value: int) -> int:
     return max(REG_MIN, min(REG_MAX, value))
 
 
-def check_int(name: str, value: object, low: int, high: int, *, where: str = "", unit: str = "") -> int:
-    """Accept an integer (not a float or bool) in ``low..high``; else raise naming the range.
-
-    Parameters
-    ----------
-    name : str
-        Vendor name of the parameter, e.g. ``"Ix94"``.
-    value : object
-        The value given.
-    low, high : int
-        Inclusive bounds.
-    where : str
-        Location prefix for the message (setup file and line).
-    unit : str
-        Unit text appended to the allowed range.
-    """
-    if isinstance(value, Fraction) and value.denominator == 1:
-        value = int(value)
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        allowed = f"integers {low}..{high}" + (f" {unit}" if unit else "")
-        shown = value if isinstance(value, int | str) else _Plain(value)
-        raise ConfigurationError.out_of_range(name, shown, allowed, where=where)
-    return value
-
-
-class _Plain:
-    """Shows a number the way the user wrote it (``2184.5``, ``4369/2``) in messages."""
-
-    def __init__(self, value: object) -> None:
-        self.value = value
-
-    def __repr__(self) -> str:
-        return str(self.value)
-
-
 @dataclass(frozen=True)
 class ServoClock:
     """The servo interrupt clock defined by I10.
@@ -145,10 +115,9 @@ class ServoClock:
     ns_per_tick: Fraction = Fraction(1)
 
     def __post_init__(self) -> None:
-        check_int("I10 (servo interrupt time)", self.i10, 1, REG_MAX, unit="(2^-23 ms)")
-        check_int("t0", self.t0, 0, 1 << 62, unit="ticks")
-        if not self.ns_per_tick > 0:
-            raise ConfigurationError.out_of_range("ns_per_tick", self.ns_per_tick, "> 0")
+        validate.integer(self.i10, "I10 (servo interrupt time)", low=1, high=REG_MAX, allowed=I10_ALLOWED)
+        validate.integer(self.t0, "t0", low=0, high=1 << 62, allowed=f"integers 0..{1 << 62} ticks")
+        validate.positive(self.ns_per_tick, "ns_per_tick")
 
     @classmethod
     def from_period_ns(cls, period_ns: int, *, t0: int = 0, ns_per_tick: Fraction = Fraction(1)) -> ServoClock:
@@ -237,15 +206,11 @@ def scale_factor_for(rtif_counts_per_ms: int | Fraction, *, triggered: bool = Fa
     64
     """
     numerator = 1 << (14 if triggered else 17)
-    rtif = Fraction(rtif_counts_per_ms)
-    if rtif <= 0:
-        raise ConfigurationError.out_of_range("real-time input frequency", rtif_counts_per_ms, "> 0 counts/ms")
-    sf = numerator / rtif
-    if sf.denominator != 1 or not 1 <= sf <= REG_MAX:
-        raise ConfigurationError.out_of_range(
-            "SCALE_FACTOR", sf, f"integers 1..{REG_MAX}: {numerator} / RTIF must be whole, "
-            "so choose the real-time input frequency as a power of two in counts/ms")
-    return int(sf)
+    rtif = validate.positive(rtif_counts_per_ms, "real-time input frequency", unit="counts/ms")
+    return validate.integer(
+        numerator / rtif, "SCALE_FACTOR", low=1, high=REG_MAX, whole=True, allowed=(
+            f"integers 1..{REG_MAX}: {numerator} / RTIF must be whole, "
+            "so choose the real-time input frequency as a power of two in counts/ms"))
 
 
 def formula_percent(scale_factor: int, input_freq_counts_per_ms: int | Fraction, *,

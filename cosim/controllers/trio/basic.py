@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
-from decimal import Decimal
 from fractions import Fraction
 from math import trunc
 from pathlib import Path
@@ -36,6 +35,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from simpy.events import Event
 
+from cosim import validate
 from cosim.controllers.trio.controller import TrioController
 from cosim.controllers.trio.grammar import GRAMMAR
 from cosim.controllers.trio.params import (
@@ -46,7 +46,6 @@ from cosim.controllers.trio.params import (
     READ_ONLY_AXIS_PARAMS,
     SYSTEM_PARAMS,
     TRUE,
-    as_int,
     unknown_name,
 )
 from cosim.controllers.trio.process import TrioProcess
@@ -319,7 +318,7 @@ class BasicRun:
             else:
                 self.variables[name] = value
         elif kind == "index_assign":
-            index = as_int(self._eval(kids[1]), "VR index", "an integer")
+            index = validate.integer(self._eval(kids[1]), "VR index", whole=True)
             self.controller.vr_memory[index] = self._eval(kids[2])
         elif kind == "call":
             yield from self._command(str(kids[0]).upper(), [self._eval(a) for a in kids[1:-1]], kids[-1])
@@ -436,7 +435,7 @@ class BasicRun:
         if name == "TABLE":
             return self.process.table_value(args[0])
         if name == "VR":
-            return self.controller.vr_memory.get(as_int(args[0], "VR index", "an integer"), Fraction(0))
+            return self.controller.vr_memory.get(validate.integer(args[0], "VR index", whole=True), Fraction(0))
         if name == "ABS":
             return abs(args[0])
         return Fraction(trunc(args[0]))
@@ -464,7 +463,7 @@ def _bool(value: bool) -> Fraction:
 
 
 _EVALUATORS: dict[str, Callable[[BasicRun, list[Any]], Fraction]] = {
-    "number": lambda run, kids: Fraction(Decimal(str(kids[0]))),
+    "number": lambda run, kids: validate.exact(str(kids[0]), "number"),
     "hexnumber": lambda run, kids: Fraction(int(str(kids[0])[1:], 16)),
     "ref": BasicRun._ref,
     "idle_ref": lambda run, kids: run.process.get("IDLE", axis=run._axis(kids[0])),

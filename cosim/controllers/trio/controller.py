@@ -27,6 +27,7 @@ from typing import Any
 
 from simpy.events import Event
 
+from cosim import validate
 from cosim.controllers.trio.gate import GateFifo, toggled_entries
 from cosim.controllers.trio.motion import Axis, Move
 from cosim.controllers.trio.outputs import SettledSignal
@@ -42,10 +43,8 @@ from cosim.controllers.trio.params import (
     PWM_REGISTER_MAX,
     READ_ONLY_AXIS_PARAMS,
     SYSTEM_PARAMS,
-    as_flag,
-    as_int,
     check_servo_period_us,
-    exact,
+    on_off,
     unknown_name,
 )
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
@@ -85,12 +84,11 @@ class TrioController:
         self.servo_period_us = check_servo_period_us(servo_period_us)
         self.period_ticks = sim.ticks(self.servo_period_us, "us", name="SERVO_PERIOD")
         self.period_s = Fraction(self.servo_period_us, 10**6)
-        if isinstance(n_axes, bool) or not isinstance(n_axes, int) or not max(PWM_AXES) < n_axes <= 64:
-            raise ConfigurationError.out_of_range("n_axes", n_axes, f"{max(PWM_AXES) + 1}..64")
-        if isinstance(table_size, bool) or not isinstance(table_size, int) or table_size < 1:
-            raise ConfigurationError.out_of_range("table_size", table_size, ">= 1 entries")
+        n_axes = validate.integer(n_axes, "n_axes", low=max(PWM_AXES) + 1, high=64)
+        table_size = validate.integer(table_size, "table_size", low=1, unit="entries")
         self.device = device
-        self.encoder_at_atype = encoder_at_atype
+        self.encoder_at_atype = None if encoder_at_atype is None else validate.integer(
+            encoder_at_atype, "encoder_at_atype", low=0, high=PWM_ENCODER_MODULUS - 1, unit="(raw PWM_ENCODER)")
         self.axes = {n: Axis(sim, n, pwm=n in PWM_AXES, device=device) for n in range(n_axes)}
         self.table_memory = [Fraction(0)] * table_size
         self.vr_memory: dict[int, Fraction] = {}
@@ -175,16 +173,13 @@ class TrioController:
     # -- axes and parameters ------------------------------------------------------------------
     def axis(self, number: object, *, where: str = "") -> Axis:
         """Axis ``number`` (ConfigurationError naming the allowed axes if there is none)."""
-        n = as_int(number, "axis", f"0..{len(self.axes) - 1}", where=where)
-        if n not in self.axes:
-            raise ConfigurationError.out_of_range("axis", n, f"0..{len(self.axes) - 1}", where=where)
-        return self.axes[n]
+        return self.axes[validate.integer(number, "axis", low=0, high=len(self.axes) - 1, where=where, whole=True)]
 
     def set_param(self, name: str, value: object, *, axis: int | None = None) -> None:
         """Write parameter ``name`` (vendor name) of ``axis`` (or a controller parameter)."""
         key = name.upper()
         if key == "WDOG":
-            self.wdog.request(as_flag(value, "WDOG"))
+            self.wdog.request(on_off(value, "WDOG"))
             return
         if key in SYSTEM_PARAMS or key in READ_ONLY_AXIS_PARAMS:
             hint = " (use DEFPOS)" if key in ("DPOS", "MPOS") else ""
@@ -239,29 +234,24 @@ class TrioController:
     # -- TABLE ----------------------------------------------------------------------------------
     def table(self, start: object, *values: object) -> None:
         """``TABLE(start, v1, v2, ...)``: write consecutive TABLE locations from ``start``."""
-        size = len(self.table_memory)
-        first = as_int(start, "TABLE index", f"0..{size - 1}")
-        last = first + len(values) - 1
-        if not 0 <= first < size or last >= size:
-            bad = first if not 0 <= first < size else last
-            raise ConfigurationError.out_of_range("TABLE index", bad, f"0..{size - 1}")
+        first = self._table_index(start)
+        self._table_index(first + len(values) - 1)
         for k, value in enumerate(values):
-            self.table_memory[first + k] = exact(value, f"TABLE({first + k})")
+            self.table_memory[first + k] = validate.exact(value, f"TABLE({first + k})")
 
     def table_value(self, index: object) -> Fraction:
         """``TABLE(n)``: read one TABLE location."""
-        size = len(self.table_memory)
-        n = as_int(index, "TABLE index", f"0..{size - 1}")
-        if not 0 <= n < size:
-            raise ConfigurationError.out_of_range("TABLE index", n, f"0..{size - 1}")
-        return self.table_memory[n]
+        return self.table_memory[self._table_index(index)]
+
+    def _table_index(self, index: object) -> int:
+        return validate.integer(index, "TABLE index", low=0, high=len(self.table_memory) - 1, whole=True)
 
     # -- motion commands ----------------------------------------------------------------------
     def defpos(self, axes: Sequence[int], positions: Sequence[object]) -> None:
         """``DEFPOS(p1, ...)`` for ``axes``: applied by the next servo cycle (see OFFPOS)."""
         _check_count("DEFPOS", positions, axes)
         for a, p in zip(axes, positions, strict=False):
-            self.axis(a).defpos(exact(p, "DEFPOS position"))
+            self.axis(a).defpos(validate.exact(p, "DEFPOS position"))
 
     def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool) -> Event:
         """``MOVE`` / ``MOVEABS`` on ``axes`` (the first is the base axis): an event once it is buffered."""
@@ -271,10 +261,8 @@ class TrioController:
         base = self.axis(group[0])
         for a in group:
             self.axis(a)
-        if base.params["SPEED"] <= 0:
-            raise ConfigurationError.out_of_range(f"SPEED of axis {base.number} for {command}",
-                                                  _plain(Fraction(base.params["SPEED"])), "> 0")
-        move = Move(group, tuple(exact(v, f"{command} value") for v in values), absolute)
+        validate.positive(base.params["SPEED"], f"SPEED of axis {base.number} for {command}")
+        move = Move(group, tuple(validate.exact(v, f"{command} value") for v in values), absolute)
         done = self.sim.env.event()
         if not self._move_waiters and self._can_queue(move):
             self._queue(move)
@@ -314,9 +302,7 @@ class TrioController:
         ax = self.axis(axis)
         if not ax.has_pwm:
             raise ConfigurationError.out_of_range("PWM_CONTROL axis", ax.number, _pwm_axes())
-        number = as_int(mode, "PWM_CONTROL mode", "0..6")
-        if number not in PWM_CONTROL_ARGS:
-            raise ConfigurationError.out_of_range("PWM_CONTROL mode", number, "0..6")
+        number = validate.integer(mode, "PWM_CONTROL mode", low=0, high=max(PWM_CONTROL_ARGS), whole=True)
         wanted = PWM_CONTROL_ARGS[number]
         if len(args) != len(wanted):
             names = ", ".join(wanted) if wanted else "nothing"
@@ -345,34 +331,22 @@ class TrioController:
         return None
 
     def _speed_link(self, multiplier: object, offset: object, limit: object, link_axis: object) -> SpeedLink:
-        allowed = f"0..{PWM_REGISTER_MAX}"
-        lim = as_int(limit, "PWM_CONTROL(2) limit value", allowed)
-        if not 0 <= lim <= PWM_REGISTER_MAX:
-            raise ConfigurationError.out_of_range("PWM_CONTROL(2) limit value", lim, allowed)
-        link = self.axis(as_int(link_axis, "PWM_CONTROL(2) link axis", f"0..{len(self.axes) - 1}"))
-        return SpeedLink(exact(multiplier, "PWM_CONTROL(2) multiplier"), exact(offset, "PWM_CONTROL(2) offset"),
-                         lim, link.number)
+        lim = validate.integer(limit, "PWM_CONTROL(2) limit value", low=0, high=PWM_REGISTER_MAX, whole=True)
+        link = validate.integer(link_axis, "PWM_CONTROL(2) link axis", low=0, high=len(self.axes) - 1, whole=True)
+        return SpeedLink(validate.exact(multiplier, "PWM_CONTROL(2) multiplier"),
+                         validate.exact(offset, "PWM_CONTROL(2) offset"), lim, link)
 
     def _fifo_entries(self, ax: Axis, compare: object, state: object, start: object, end: object) -> list[Any]:
-        flag = exact(compare, "PWM_CONTROL(3) GT/LT flag")
-        if flag not in (0, 1):
-            raise ConfigurationError.out_of_range("PWM_CONTROL(3) GT/LT flag", _plain(flag), "1 (GT) or 0 (LT)")
-        first_state = as_flag(state, "PWM_CONTROL(3) ON/OFF")
+        greater = validate.flag(compare, "PWM_CONTROL(3) GT/LT flag", allowed="1 (GT) or 0 (LT)")
+        first_state = on_off(state, "PWM_CONTROL(3) ON/OFF")
         size = len(self.table_memory)
         bounds = f"0..{size - 1} (TABLE size {size})"
-        first = as_int(start, "PWM_CONTROL(3) table start", bounds)
-        last = as_int(end, "PWM_CONTROL(3) table end", bounds)
-        if not 0 <= first < size:
-            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table start", first, bounds)
-        if not 0 <= last < size:
-            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table end", last, bounds)
-        if last < first:
-            raise ConfigurationError.out_of_range("PWM_CONTROL(3) table end", last, f">= table start {first}")
-        if last - first + 1 > FIFO_DEPTH:
-            raise ConfigurationError.out_of_range("PWM_CONTROL(3) positions in one load", last - first + 1,
-                                                  f"1..{FIFO_DEPTH} (the FIFO depth)")
-        return toggled_entries(self.table_memory[first:last + 1], ax.units, greater=flag == 1,
-                               first_state=first_state)
+        first = validate.integer(start, "PWM_CONTROL(3) table start", low=0, high=size - 1, allowed=bounds, whole=True)
+        last = validate.integer(end, "PWM_CONTROL(3) table end", low=0, high=size - 1, allowed=bounds, whole=True)
+        validate.integer(last, "PWM_CONTROL(3) table end", low=first, allowed=f">= table start {first}")
+        validate.integer(last - first + 1, "PWM_CONTROL(3) positions in one load", low=1, high=FIFO_DEPTH,
+                         allowed=f"1..{FIFO_DEPTH} (the FIFO depth)")
+        return toggled_entries(self.table_memory[first:last + 1], ax.units, greater=greater, first_state=first_state)
 
     def _gate(self, axis: int, what: str) -> GateFifo:
         gate = self.axes[axis].gate
@@ -425,10 +399,6 @@ class TrioController:
 
 def _pwm_axes() -> str:
     return ", ".join(map(str, PWM_AXES)) + " (the axes with the PWM feature)"
-
-
-def _plain(value: Fraction) -> int | float:
-    return value.numerator if value.denominator == 1 else float(value)
 
 
 def _check_count(command: str, values: Sequence[object], axes: Sequence[int]) -> None:

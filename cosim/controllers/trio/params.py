@@ -2,7 +2,7 @@
 
 Parameters keep their vendor names (``UNITS``, ``PWM_MARK``...) because that is what users write in
 their programs; values are exact (``int`` or :class:`~fractions.Fraction`), never floats. Every
-write goes through :func:`check_value`, which raises
+write goes through its :class:`ParamSpec` converter (built on :mod:`cosim.validate`), which raises
 :class:`~cosim.errors.ConfigurationError` naming the parameter, the value and the allowed range.
 
 Constants from the note (TN20-81) and the controller facts:
@@ -21,10 +21,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 
-from cosim.errors import ConfigurationError
+from cosim import validate
 
 PWM_CLOCK_HZ = 20_000_000
 #: One PWM clock [ns] (exact: 10**9 / 20 MHz).
@@ -50,47 +49,13 @@ ON, OFF, TRUE, FALSE = 1, 0, -1, 0
 Number = int | Fraction
 
 
-def exact(value: object, name: str, *, where: str = "") -> Fraction:
-    """A number as an exact Fraction (a float is taken as the decimal it prints as).
-
-    Raises
-    ------
-    ConfigurationError
-        If ``value`` is not a finite number.
-    """
-    if isinstance(value, bool):
-        return Fraction(int(value))
-    if isinstance(value, int | Fraction):
-        return Fraction(value)
-    try:
-        result = Fraction(Decimal(str(value)))
-    except (InvalidOperation, ValueError, TypeError):
-        raise ConfigurationError.out_of_range(name, value, "a finite number", where=where) from None
-    return result
+#: The allowed values of an ON/OFF parameter, as messages say them.
+ON_OFF = "ON/OFF (1, 0 or TRUE = -1)"
 
 
-def as_int(value: object, name: str, allowed: str, *, where: str = "") -> int:
-    """A whole number as ``int`` (``400.0`` is fine, ``400.5`` is not)."""
-    number = exact(value, name, where=where)
-    if number.denominator != 1:
-        raise ConfigurationError.out_of_range(name, _show(number), allowed, where=where)
-    return number.numerator
-
-
-def as_flag(value: object, name: str, *, where: str = "") -> int:
+def on_off(value: object, name: str, *, where: str = "") -> int:
     """An ON/OFF value: 1 (ON), 0 (OFF) or -1 (TRUE) -> 1 or 0."""
-    number = exact(value, name, where=where)
-    if number not in (0, 1, -1):
-        raise ConfigurationError.out_of_range(name, _show(number), "ON/OFF (1, 0 or TRUE = -1)", where=where)
-    return 1 if number else 0
-
-
-def _show(value: Fraction) -> int | float | Fraction:
-    """A value as the user most likely wrote it, for messages."""
-    if value.denominator == 1:
-        return value.numerator
-    as_float = float(value)
-    return as_float if Fraction(Decimal(str(as_float))) == value else value
+    return int(validate.flag(value, name, where=where, true=(ON, TRUE), allowed=ON_OFF))
 
 
 @dataclass(frozen=True)
@@ -124,55 +89,44 @@ class ParamSpec:
     pwm_only: bool = False
 
 
-def _range(low: Fraction | None, high: Fraction | None, *, integer: bool, low_open: bool = False,
-           allowed: str) -> Callable[[object, str, str], Number]:
-    def convert(value: object, name: str, where: str) -> Number:
-        number = exact(value, name, where=where)
-        bad = (integer and number.denominator != 1) or (
-            low is not None and (number <= low if low_open else number < low)) or (
-            high is not None and number > high)
-        if bad:
-            raise ConfigurationError.out_of_range(name, _show(number), allowed, where=where)
-        return number.numerator if integer else number
+_REGISTER = f"integer 0..{PWM_REGISTER_MAX}"
 
-    return convert
+
+def _positive(value: object, name: str, where: str) -> Number:
+    return validate.positive(value, name, where=where)
+
+
+def _not_negative(value: object, name: str, where: str) -> Number:
+    return validate.positive(value, name, where=where, zero=True)
+
+
+def _register(value: object, name: str, where: str) -> Number:
+    return validate.integer(value, name, low=0, high=PWM_REGISTER_MAX, where=where, allowed=_REGISTER, whole=True)
 
 
 def _flag(value: object, name: str, where: str) -> Number:
-    return as_flag(value, name, where=where)
+    return on_off(value, name, where=where)
 
 
 def _atype(value: object, name: str, where: str) -> Number:
     allowed = f"{ATYPE_VIRTUAL} (virtual), {ATYPE_STEPPER_PWM} (stepper output with PWM)"
-    number = as_int(value, name, allowed, where=where)
-    if number not in (ATYPE_VIRTUAL, ATYPE_STEPPER_PWM):
-        raise ConfigurationError.out_of_range(name, number, allowed, where=where)
-    return number
+    number = validate.integer(value, name, where=where, allowed=allowed, whole=True)
+    return validate.choice(number, name, (ATYPE_VIRTUAL, ATYPE_STEPPER_PWM), where=where, allowed=allowed)
 
-
-_REGISTER = "integer 0..65535"
 
 #: Writable axis parameters.
 AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
-    ParamSpec("UNITS", 1, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
-              "counts/unit", "step pulses per user unit"),
-    ParamSpec("SPEED", 1000, ">= 0", _range(Fraction(0), None, integer=False, allowed=">= 0"),
-              "units/s", "programmed path speed"),
-    ParamSpec("ACCEL", 1000, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
-              "units/s^2", "acceleration"),
-    ParamSpec("DECEL", 1000, "> 0", _range(Fraction(0), None, integer=False, low_open=True, allowed="> 0"),
-              "units/s^2", "deceleration"),
+    ParamSpec("UNITS", 1, "> 0", _positive, "counts/unit", "step pulses per user unit"),
+    ParamSpec("SPEED", 1000, ">= 0", _not_negative, "units/s", "programmed path speed"),
+    ParamSpec("ACCEL", 1000, "> 0", _positive, "units/s^2", "acceleration"),
+    ParamSpec("DECEL", 1000, "> 0", _positive, "units/s^2", "deceleration"),
     ParamSpec("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER_PWM}", _atype, "",
               "axis type: 0 virtual, 35 stepper output with PWM"),
     ParamSpec("SERVO", 0, "ON/OFF", _flag, "", "servo on: step pulses feed MPOS and PWM_ENCODER"),
-    ParamSpec("FE_LIMIT", 2000, ">= 0", _range(Fraction(0), None, integer=False, allowed=">= 0"),
-              "units", "largest |DPOS - MPOS| before a motion error"),
-    ParamSpec("PWM_CYCLE", 0, _REGISTER, _range(Fraction(0), Fraction(PWM_REGISTER_MAX), integer=True,
-                                                 allowed=_REGISTER),
-              "clocks", "PWM mark+space period [20 MHz clocks]", pwm_only=True),
-    ParamSpec("PWM_MARK", 0, _REGISTER, _range(Fraction(0), Fraction(PWM_REGISTER_MAX), integer=True,
-                                                allowed=_REGISTER),
-              "clocks", "PWM on-time [20 MHz clocks]", pwm_only=True),
+    ParamSpec("FE_LIMIT", 2000, ">= 0", _not_negative, "units", "largest |DPOS - MPOS| before a motion error"),
+    ParamSpec("PWM_CYCLE", 0, _REGISTER, _register, "clocks", "PWM mark+space period [20 MHz clocks]",
+              pwm_only=True),
+    ParamSpec("PWM_MARK", 0, _REGISTER, _register, "clocks", "PWM on-time [20 MHz clocks]", pwm_only=True),
 )}
 
 #: Axis parameters that can only be read (computed by the model).
@@ -201,10 +155,8 @@ def axis_spec(name: str) -> ParamSpec:
 def check_servo_period_us(value: object) -> int:
     """A servo period [us] the EURO205X model supports."""
     allowed = ", ".join(map(str, SERVO_PERIODS_US)) + " us"
-    number = as_int(value, "SERVO_PERIOD", allowed)
-    if number not in SERVO_PERIODS_US:
-        raise ConfigurationError.out_of_range("SERVO_PERIOD", number, allowed)
-    return number
+    number = validate.integer(value, "SERVO_PERIOD", allowed=allowed, whole=True)
+    return validate.choice(number, "SERVO_PERIOD", SERVO_PERIODS_US, allowed=allowed)
 
 #: Commands and functions of the modelled BASIC subset (see :mod:`cosim.controllers.trio.basic`).
 COMMANDS: dict[str, str] = {

@@ -26,8 +26,8 @@ from typing import Any
 
 from simpy.events import Event
 
+from cosim import validate
 from cosim.controllers.trio.controller import TrioController
-from cosim.controllers.trio.params import as_int, exact
 from cosim.errors import ConfigurationError
 from cosim.timebase import Priority
 
@@ -103,12 +103,9 @@ class TrioProcess:
         return loaded if loaded is not None else self._done()
 
     def wa(self, ms: object) -> Event:
-        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ns)."""
-        value = exact(ms, "WA time [ms]")
-        if value < 0:
-            raise ConfigurationError.out_of_range("WA time [ms]", float(value), ">= 0")
-        ticks = value * self.sim.ticks(1, "ms")
-        return self.sim.after(as_int(ticks, "WA time [ms]", "a whole number of ns"))
+        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks)."""
+        value = validate.positive(ms, "WA time", unit="ms", zero=True)
+        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"))
 
     def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
         """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""

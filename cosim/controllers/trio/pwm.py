@@ -31,9 +31,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import numpy.typing as npt
 
+from cosim import validate
 from cosim.controllers.trio.outputs import SettledSignal
-from cosim.controllers.trio.params import PWM_CLOCK_HZ, PWM_CLOCK_NS, SPEED_LINK_DIVISOR
-from cosim.errors import ConfigurationError
+from cosim.controllers.trio.params import PWM_CLOCK_HZ, PWM_CLOCK_NS, PWM_REGISTER_MAX, SPEED_LINK_DIVISOR
 from cosim.signals import Signal
 
 if TYPE_CHECKING:
@@ -99,9 +99,9 @@ def pwm_frequency_hz(cycle_clocks: int) -> Fraction:
     >>> pwm_frequency_hz(1000), pwm_frequency_hz(200)
     (Fraction(20000, 1), Fraction(100000, 1))
     """
-    if cycle_clocks <= 0:
-        raise ConfigurationError.out_of_range("PWM_CYCLE", cycle_clocks, "1..65535 for a frequency")
-    return Fraction(PWM_CLOCK_HZ, cycle_clocks)
+    cycle = validate.integer(cycle_clocks, "PWM_CYCLE", low=1, high=PWM_REGISTER_MAX,
+                             allowed=f"1..{PWM_REGISTER_MAX} for a frequency")
+    return Fraction(PWM_CLOCK_HZ, cycle)
 
 
 class PwmGenerator:

@@ -22,9 +22,9 @@ from fractions import Fraction
 from math import ceil, floor
 from typing import Any
 
+from cosim import validate
 from cosim.controllers.trio.params import FIFO_DEPTH
 from cosim.controllers.trio.process import TrioProcess
-from cosim.errors import ConfigurationError
 
 
 @dataclass(frozen=True)
@@ -61,12 +61,16 @@ class RasterJob:
     table_start: int = 0
 
     def __post_init__(self) -> None:
-        if not 1 <= self.chunk <= FIFO_DEPTH:
-            raise ConfigurationError.out_of_range("chunk", self.chunk, f"1..{FIFO_DEPTH}")
-        if self.lines < 1 or self.positions < 1:
-            raise ConfigurationError.out_of_range("lines and positions", (self.lines, self.positions), ">= 1 each")
-        if self.pitch <= 0 or self.refill_ms < 0:
-            raise ConfigurationError.out_of_range("pitch, refill_ms", (self.pitch, self.refill_ms), "> 0, >= 0")
+        validate.integer(self.lines, "lines", low=1, where="RasterJob")
+        validate.integer(self.positions, "positions", low=1, where="RasterJob")
+        validate.integer(self.chunk, "chunk", low=1, high=FIFO_DEPTH, where="RasterJob")
+        validate.integer(self.table_start, "table_start", low=0, where="RasterJob")
+        exact = {"pitch": validate.positive(self.pitch, "pitch", unit="units", where="RasterJob"),
+                 "margin": validate.exact(self.margin, "margin", where="RasterJob"),
+                 "line_spacing": validate.exact(self.line_spacing, "line_spacing", where="RasterJob"),
+                 "refill_ms": validate.positive(self.refill_ms, "refill_ms", unit="ms", zero=True, where="RasterJob")}
+        for name, value in exact.items():
+            object.__setattr__(self, name, value)
 
     @property
     def x_end(self) -> Fraction:
