@@ -36,7 +36,8 @@ def _scenario_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
         "zsh": f"({names})",
         "tcsh": f"({names})",
         "preamble": {"bash": (f'_cosim_scenarios() {{\n  compgen -W "{names}" -- "$1"\n'
-                              '  compgen -f -X "!*.py" -- "$1"\n  compgen -d -- "$1"\n}\n')},
+                              '  compgen -f -X "!*.py" -- "$1"\n  compgen -f -X "!*.toml" -- "$1"\n'
+                              '  compgen -d -- "$1"\n}\n')},
     }
 
 
@@ -47,9 +48,13 @@ def _folder_completion(action: argparse.Action) -> None:
 # -- run ------------------------------------------------------------------------------------------
 
 def _args_run(parser: argparse.ArgumentParser) -> None:
-    _scenario_argument(parser, "bundled scenario name (see `cosim list`) or path to a .py script")
+    _scenario_argument(parser, "bundled scenario name (see `cosim list`), a .py scenario script, a .toml machine "
+                               "file, or a program (.bas) to run on --machine")
+    parser.add_argument("--machine", type=Path, default=None, metavar="MACHINE.toml",
+                        help="the machine file a program given as SCENARIO runs on (its [[program]] list is replaced)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
-                        help="set a declared parameter (repeatable; see `cosim params SCENARIO`)")
+                        help="set a declared parameter, or a machine-file key by its dotted path or a unique "
+                             "last part (repeatable; see `cosim params SCENARIO`)")
     _folder_completion(parser.add_argument("--out", type=Path, default=None,
                                            help="results folder (default: results/<scenario>)"))
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same trace")
@@ -69,11 +74,27 @@ def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
     return values
 
 
+def _load(args: argparse.Namespace) -> object:
+    """The scenario or machine to run: a name, a .py script, a .toml machine, or a program on --machine."""
+    from cosim.catalog import load
+
+    machine = getattr(args, "machine", None)
+    if machine is not None:
+        from cosim.machine import load_machine
+
+        return load_machine(machine, program=args.scenario)
+    if Path(args.scenario).suffix in (".bas", ".pmc", ".nc", ".ngc"):
+        raise ConfigurationError(f"{args.scenario} is a program: name the machine it runs on with "
+                                 f"--machine MACHINE.toml (see docs/machines.md)")
+    return load(args.scenario)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from cosim.runner import run_scenario
-    from cosim.scenario import load
+    from cosim.scenario import ScenarioFile
 
-    scenario = load(args.scenario)
+    scenario = _load(args)
+    assert isinstance(scenario, ScenarioFile)
     out = args.out or Path("results") / scenario.name
     formats = (() if args.no_vcd else ("vcd",)) + (args.format,)
     result = run_scenario(scenario, overrides=_parse_sets(args.overrides), seed=args.seed, until=args.until,
@@ -85,15 +106,32 @@ def cmd_run(args: argparse.Namespace) -> int:
     return EXIT_PASS if result.verdict == "PASS" else EXIT_FAIL
 
 
+def _args_check_machine(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("machine", type=Path, help="the machine file (.toml)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="set a machine-file key first (as for `cosim run`)")
+
+
+def cmd_check_machine(args: argparse.Namespace) -> int:
+    from cosim.machine import load_machine
+    from cosim.machine.check import check_machine
+
+    machine = load_machine(args.machine)
+    print(check_machine(machine, overrides=_parse_sets(args.overrides)))
+    return EXIT_PASS
+
+
 # -- list, params ---------------------------------------------------------------------------------
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from cosim.scenario import bundled, description
+    from cosim.catalog import description, examples, shown
+    from cosim.scenario import bundled
 
-    names = bundled()
-    width = max((len(n) for n in names), default=0)
-    for name in names:
-        print(f"{name:<{width}}  {description(name)}")
+    rows = [(name, description(name)) for name in bundled()]
+    rows += [(shown(path), description(path)) for path in examples()]
+    width = max((len(n) for n, _ in rows), default=0)
+    for name, text in rows:
+        print(f"{name:<{width}}  {text}")
     return EXIT_PASS
 
 
@@ -102,7 +140,7 @@ def _args_params(parser: argparse.ArgumentParser) -> None:
 
 
 def cmd_params(args: argparse.Namespace) -> int:
-    from cosim.scenario import load
+    from cosim.catalog import load
 
     scenario = load(args.scenario)
     print(f"{scenario.name}: {scenario.description}\n(default end time {scenario.until})")
@@ -182,7 +220,7 @@ def _args_sweep(parser: argparse.ArgumentParser) -> None:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from cosim import sweep, sweep_report
-    from cosim.scenario import load
+    from cosim.catalog import load
 
     scenario = load(args.scenario)
     runs = sweep.plan(args.scenario, grid=sweep.parse_grid(args.grid), random=sweep.parse_random(args.random),
@@ -262,10 +300,18 @@ class Command:
 
 
 COMMANDS: tuple[Command, ...] = (
-    Command("run", cmd_run, "run one scenario and check its timing", arguments=_args_run,
-            description="Run a bundled scenario (by name) or your own script (a .py path), print the check "
-                        "table and write result.json, trace.vcd and tables."),
-    Command("list", cmd_list, "list the bundled scenarios with their one-line descriptions"),
+    Command("run", cmd_run, "run one scenario or machine file and check its timing", arguments=_args_run,
+            description="Run a bundled scenario (by name), your own script (a .py path) or a machine file (.toml; "
+                        "with --machine, a program on a machine), print the check table and write result.json, "
+                        "trace.vcd and tables.",
+            epilog="examples: cosim run laser_pwm --set pwm_on=200; cosim run examples/pokeys_mill/mill.toml "
+                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml"),
+    Command("check-machine", cmd_check_machine, "check a machine file: build the machine without running it",
+            arguments=_args_check_machine,
+            description="Read MACHINE.toml, check every key, load its programs and FMUs and join the couplings, "
+                        "without simulating: errors name the file and the key (or the program's line), with the "
+                        "allowed values. Exit 0 when the machine can run, 2 when it cannot."),
+    Command("list", cmd_list, "list the bundled scenarios and example machines with their descriptions"),
     Command("params", cmd_params, "show a scenario's parameters (name, default, unit, range, help)",
             arguments=_args_params),
     Command("build-fmus", cmd_build, "build the plant FMUs (FMI 2.0 and 3.0); says what it built and where",

@@ -25,6 +25,7 @@ from cosim.errors import ConfigurationError, CosimError, ScenarioError
 from cosim.export import write_trace
 from cosim.kernel import Simulation
 from cosim.scenario import Run, ScenarioFile, Values, where
+from cosim.timebase import TimeBase
 
 RESULT_VERSION = 1
 
@@ -125,7 +126,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     Parameters
     ----------
     scenario : ScenarioFile
-        From :func:`cosim.scenario.load`.
+        From :func:`cosim.catalog.load` (a scenario or a machine file).
     overrides : dict, optional
         ``--set`` values, parsed and range-checked against the declared parameters.
     seed : int
@@ -143,8 +144,8 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         Bad parameters or a broken script (before anything runs).
     """
     values = scenario.resolve(overrides)
-    with Simulation(seed=seed) as sim:
-        end = _end_time(sim, until if until is not None else scenario.until)
+    with Simulation(seed=seed, timebase=TimeBase(scenario.resolution_for(values))) as sim:
+        end = _end_time(sim, until if until is not None else scenario.until_for(values))
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
         run = Run(sim=sim, p=Values(values), until=end)
