@@ -193,7 +193,10 @@ def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
 def _end_time(sim: Simulation, until: str | int) -> int:
     if isinstance(until, int):
         return sim.timebase.check_ticks(until, name="until", minimum=1)
-    return sim.ticks(until, name="until")
+    end = sim.ticks(until, name="until")
+    if end <= 0:
+        raise ConfigurationError.out_of_range("until", until, "a time > 0, e.g. '20 ms'")
+    return end
 
 
 def _progress_bar(sim: Simulation, end: int) -> Any:
