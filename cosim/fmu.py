@@ -34,7 +34,7 @@ from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, 
 from fmpy.fmi3 import FMU3Slave
 
 from cosim.errors import ConfigurationError, FmuError, PlantTerminated
-from cosim.fmuvars import Value, Variable
+from cosim.fmuvars import Value, Variable, accessors
 from cosim.timebase import TimeBase
 
 __all__ = ["Fmu", "Value", "Variable", "read_description"]
@@ -219,86 +219,10 @@ class Fmu:
                         f"{_STATUS.get(status, status)}", self.log)
 
     def _accessors(self, var: Variable) -> tuple[Callable[[], Value], Callable[[Any], None]]:
-        """Prepared getter and setter of one variable: ctypes arguments made once, the status checked.
-
-        The setter takes a value checked by :meth:`Variable.check` (a flat list for an array).
-        """
-        kind, n, v3 = var.kind, var.size, self.fmi_version == 3
-        get_fn = self._function(f"fmi{self.fmi_version}Get{kind.function}")
-        set_fn = self._function(f"fmi{self.fmi_version}Set{kind.function}")
-        component = self._fmu.component
-        vrs = (ctypes.c_uint32 * 1)(var.vr)
-        tail = (n,) if v3 else ()
-        failed, name, array = self._failed, var.name, bool(var.shape)
-        if kind.name == "Binary":
-            return self._binary_accessors(var, get_fn, set_fn)
-        buffer = (kind.ctype * n)()
-
-        def call(fn: Callable[..., int], what: str) -> None:
-            status = fn(component, vrs, 1, buffer, *tail)
-            if status > 1:
-                raise failed(what, status)
-
-        if kind.python is str:
-            def put_text(value: Any) -> None:
-                for i, text in enumerate(value if array else [value]):
-                    buffer[i] = text.encode("utf-8")
-                call(set_fn, f"set {name}")
-
-            def get_text() -> Value:
-                call(get_fn, f"get {name}")
-                return var.value_of(list(buffer))
-
-            return get_text, put_text
-
-        if array:
-            def get_array() -> Value:
-                call(get_fn, f"get {name}")
-                return var.value_of(list(buffer))
-
-            def put_array(values: Any) -> None:
-                buffer[:] = values
-                call(set_fn, f"set {name}")
-
-            return get_array, put_array
-
-        convert = bool if kind.python is bool else kind.python
-
-        def get_scalar() -> Value:
-            call(get_fn, f"get {name}")
-            return convert(buffer[0])
-
-        def put_scalar(value: Any) -> None:
-            buffer[0] = value
-            call(set_fn, f"set {name} = {value!r}")
-
-        return get_scalar, put_scalar
-
-    def _binary_accessors(self, var: Variable, get_fn: Callable[..., int],
-                          set_fn: Callable[..., int]) -> tuple[Callable[[], Value], Callable[[Any], None]]:
-        n, component, failed = var.size, self._fmu.component, self._failed
-        vrs = (ctypes.c_uint32 * 1)(var.vr)
-        byte_p = ctypes.POINTER(ctypes.c_uint8)
-        sizes, pointers = (ctypes.c_size_t * n)(), (byte_p * n)()
-
-        def get() -> Value:
-            status = get_fn(component, vrs, 1, sizes, pointers, n)
-            if status > 1:
-                raise failed(f"get {var.name}", status)
-            return var.value_of([ctypes.string_at(ctypes.cast(pointers[i], ctypes.c_void_p).value or 0, sizes[i])
-                                 if sizes[i] else b"" for i in range(n)])
-
-        def put(value: Any) -> None:
-            blobs = [bytes(b) for b in (value if var.shape else [value])]
-            keep = [(ctypes.c_uint8 * max(len(b), 1)).from_buffer_copy(b.ljust(1, b"\0")) for b in blobs]
-            for i, (blob, data) in enumerate(zip(blobs, keep, strict=True)):
-                sizes[i] = len(blob)
-                pointers[i] = ctypes.cast(data, byte_p)
-            status = set_fn(component, vrs, 1, sizes, pointers, n)
-            if status > 1:
-                raise failed(f"set {var.name}", status)
-
-        return get, put
+        prefix = f"fmi{self.fmi_version}"
+        return accessors(var, self._function(f"{prefix}Get{var.kind.function}"),
+                         self._function(f"{prefix}Set{var.kind.function}"), component=self._fmu.component,
+                         fmi3=self.fmi_version == 3, failed=self._failed)
 
     def _initialise(self, parameters: dict[str, Any]) -> None:
         t0 = self.timebase.seconds(self.t)

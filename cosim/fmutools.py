@@ -225,6 +225,9 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
         Output grid with unit (default: the default experiment step, else 1/500 of the run).
     out : path, optional
         Results folder.
+
+    The run starts at 0 s (a default experiment's start time is not used). Integer, Boolean and
+    enumeration outputs are recorded as numbers; strings and binaries are not recorded.
     """
     from cosim.fmu import read_description
     from cosim.runner import run_scenario

@@ -304,3 +304,79 @@ class Variable:
             return array.reshape(self.shape)
         return np.array(elements, dtype=kind.dtype).reshape(self.shape)
 
+
+
+# -- prepared FMI calls -----------------------------------------------------------------------------
+Status = Callable[..., int]
+
+
+def accessors(var: Variable, get_fn: Status, set_fn: Status, *, component: Any, fmi3: bool,
+              failed: Callable[[str, int], Exception]) -> tuple[Callable[[], Value], Callable[[Any], None]]:
+    """The prepared getter and setter of one variable: ctypes arguments made once, the status checked.
+
+    ``get_fn`` and ``set_fn`` are the FMI functions of its type (taking ctypes arguments, returning
+    the status); ``failed(what, status)`` makes the error to raise for a status above Warning. The
+    setter takes a value checked by :meth:`Variable.check` (a flat list for an array).
+    """
+    kind, n, name, array = var.kind, var.size, var.name, bool(var.shape)
+    vrs = (ctypes.c_uint32 * 1)(var.vr)
+    if kind.name == "Binary":
+        return _binary_accessors(var, get_fn, set_fn, component, failed)
+    buffer = (kind.ctype * n)()
+    tail = (n,) if fmi3 else ()
+
+    def call(fn: Status, what: str) -> None:
+        status = fn(component, vrs, 1, buffer, *tail)
+        if status > 1:
+            raise failed(what, status)
+
+    if kind.python is str or array:
+        def get_elements() -> Value:
+            call(get_fn, f"get {name}")
+            return var.value_of(list(buffer))
+
+        def put_elements(value: Any) -> None:
+            elements = value if array else [value]
+            buffer[:] = [e.encode("utf-8") for e in elements] if kind.python is str else elements
+            call(set_fn, f"set {name}")
+
+        return get_elements, put_elements
+
+    convert = kind.python
+
+    def get_scalar() -> Value:
+        call(get_fn, f"get {name}")
+        return convert(buffer[0])
+
+    def put_scalar(value: Any) -> None:
+        buffer[0] = value
+        call(set_fn, f"set {name} = {value!r}")
+
+    return get_scalar, put_scalar
+
+
+def _binary_accessors(var: Variable, get_fn: Status, set_fn: Status, component: Any,
+                      failed: Callable[[str, int], Exception]) -> tuple[Callable[[], Value], Callable[[Any], None]]:
+    n = var.size
+    vrs = (ctypes.c_uint32 * 1)(var.vr)
+    byte_p = ctypes.POINTER(ctypes.c_uint8)
+    sizes, pointers = (ctypes.c_size_t * n)(), (byte_p * n)()
+
+    def get() -> Value:
+        status = get_fn(component, vrs, 1, sizes, pointers, n)
+        if status > 1:
+            raise failed(f"get {var.name}", status)
+        return var.value_of([ctypes.string_at(ctypes.cast(pointers[i], ctypes.c_void_p).value or 0, sizes[i])
+                             if sizes[i] else b"" for i in range(n)])
+
+    def put(value: Any) -> None:
+        blobs = [bytes(b) for b in (value if var.shape else [value])]
+        keep = [(ctypes.c_uint8 * max(len(b), 1)).from_buffer_copy(b.ljust(1, b"\0")) for b in blobs]
+        for i, (blob, data) in enumerate(zip(blobs, keep, strict=True)):
+            sizes[i] = len(blob)
+            pointers[i] = ctypes.cast(data, byte_p)
+        status = set_fn(component, vrs, 1, sizes, pointers, n)
+        if status > 1:
+            raise failed(f"set {var.name}", status)
+
+    return get, put
