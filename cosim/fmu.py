@@ -25,6 +25,7 @@ import shutil
 import tempfile
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +34,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.fmi3 import FMU3Slave
 
-from cosim.errors import ConfigurationError, FmuError, PlantTerminated
+from cosim.errors import ConfigurationError, CosimError, FmuError, PlantTerminated
 from cosim.fmuvars import Value, Variable, accessors
 from cosim.timebase import TimeBase
 
@@ -133,7 +134,7 @@ class Fmu:
         self.t = start
         self.events = 0
         self.terminated: str | None = None
-        self._ended: PlantTerminated | None = None
+        self._ended: CosimError | None = None  # why it cannot step any more: terminated or closed
         self._unzipdir: str | None = None
         self._fmu: Any = None
         self.model = read_description(self.path)
@@ -467,10 +468,10 @@ class Fmu:
         self.terminated = reason
         with contextlib.suppress(FMICallException):  # the FMU's own message is in the log
             self._fmu.terminate()
-        self._ended = PlantTerminated(f"{self._where} {reason}; it is terminated at t={t} ticks",
-                                      plant=self.instance_name, fmu=self.path.name, t=t, reason=reason,
-                                      log=tuple(self.log))
-        raise self._ended
+        ended = PlantTerminated(f"{self._where} {reason}; it is terminated at t={t} ticks",
+                                plant=self.instance_name, fmu=self.path.name, t=t, reason=reason, log=tuple(self.log))
+        self._ended = ended
+        raise ended
 
     # -- teardown ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -480,6 +481,10 @@ class Fmu:
         """
         fmu, self._fmu = self._fmu, None
         if fmu is not None:
+            closed = FmuError(f"{self._where} is closed (its simulation has ended)")
+            self._ended = closed
+            for var in self.variables.values():  # the prepared calls hold the freed instance: refuse them
+                var.get = var.set = partial(_refuse, closed)
             try:
                 if self.terminated is None:
                     fmu.terminate()
@@ -502,3 +507,7 @@ class Fmu:
 
     def __del__(self) -> None:
         self.close()
+
+
+def _refuse(error: Exception, *args: Any) -> Any:
+    raise error

@@ -14,13 +14,14 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from cosim.checks.levels import Bound
 from cosim.controllers.scripted import play
-from cosim.errors import ConfigurationError, PlantTerminated
+from cosim.errors import ConfigurationError, FmuError, PlantTerminated
 from cosim.export import read_trace
 from cosim.kernel import Simulation
 from cosim.master import Plant
@@ -42,8 +43,8 @@ FMI2_VALUES: dict[str, object] = {"speed": -2.5, "i32_in": -2147483648, "flag_in
                                   "mode_in": 3}
 
 
-def types_plant(sim: Simulation, fmi_version: int, **parameters: object) -> Plant:
-    return Plant.load(sim, "TypesTest", name="types", fmi_version=fmi_version, parameters=parameters)  # type: ignore[arg-type]
+def types_plant(sim: Simulation, fmi_version: int, **parameters: Any) -> Plant:
+    return Plant.load(sim, "TypesTest", name="types", fmi_version=fmi_version, parameters=parameters)
 
 
 @pytest.mark.parametrize("fmi_version", [2, 3])
@@ -79,7 +80,7 @@ def test_variables_carry_the_declared_type_unit_and_range(fmi_version: int) -> N
 def test_arrays_are_read_and_set_as_numpy_arrays() -> None:
     with Simulation() as sim:
         plant = types_plant(sim, 3)
-        assert plant.read("vec_in").tolist() == [1.0, 2.0, 3.0]  # type: ignore[union-attr]
+        assert np.asarray(plant.read("vec_in")).tolist() == [1.0, 2.0, 3.0]
         plant.set({"vec_in": np.array([0.5, -1.0, 4.0])})
         vec = plant.read("vec_out")
         assert isinstance(vec, np.ndarray) and vec.dtype == np.float64 and vec.tolist() == [1.0, -2.0, 8.0]
@@ -219,12 +220,15 @@ def test_a_watched_plant_ends_the_run_before_anything_else_at_its_tick() -> None
 def test_a_terminated_plant_keeps_its_last_values_and_cannot_go_on() -> None:
     with Simulation() as sim:
         plant = types_plant(sim, 2, speed=2.0, terminate_time=0.35)
+        plant.record(["position"], period=100 * MS)
         with pytest.raises(PlantTerminated) as info:
-            sim.run(until=500 * MS) if plant.record(["position"], period=100 * MS) else None
+            sim.run(until=500 * MS)
         assert info.value.t == 350 * MS and "FMU log:" in str(info.value)
         assert plant.read("position") == pytest.approx(0.7, abs=1e-12)  # the value at its last instant
         with pytest.raises(PlantTerminated):
             plant.fmu.advance_to(500 * MS)
+    with pytest.raises(FmuError, match=r"types \(TypesTest.fmu\) is closed"):  # freed with its simulation
+        plant.read("position")
 
 
 @pytest.mark.parametrize("fmi_version", [2, 3])

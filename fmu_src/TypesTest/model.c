@@ -4,7 +4,7 @@
  * constant whose elements show the row-major order), position integrates speed, and three instants
  * set by parameters exercise the importer:
  *
- *   event_time      event_stage goes from 1 to 2: a time event. With early return (FMI 3.0) doStep
+ *   stage_time      event_stage goes from 1 to 2: a time event. With early return (FMI 3.0) doStep
  *                   stops there; with event mode the stage changes in fmi3UpdateDiscreteStates.
  *   terminate_time  the model asks to end the simulation: doStep stops there and reports
  *                   terminateSimulation (FMI 3.0) or returns fmi2Discard with fmi2Terminated (FMI 2.0);
@@ -26,7 +26,7 @@ static double noise(double t) { return 1e-12 * (1.0 + fabs(t)); }
 
 Status model_init(ModelInstance *m) {
     m->s.position = 0.0;
-    m->s.stage = m->v.event_time <= m->time ? 2 : 1;
+    m->s.stage = m->v.stage_time <= m->time ? 2 : 1;
     m->s.pending_stage = 0;
     m->s.pending_terminate = 0;
     return ST_OK;
@@ -70,9 +70,9 @@ static int next_instant(const ModelInstance *m, double t, double t_end, double *
     const double limit = t_end + noise(t_end);
     int what = NONE;
     *at = t_end;
-    if (m->s.stage == 1 && !m->s.pending_stage && m->v.event_time <= limit) {
+    if (m->s.stage == 1 && !m->s.pending_stage && m->v.stage_time <= limit) {
         what = STAGE;
-        *at = m->v.event_time;
+        *at = m->v.stage_time;
     }
     if (m->v.terminate_time > 0.0 && !m->s.pending_terminate && m->v.terminate_time <= limit &&
         (what == NONE || m->v.terminate_time < *at)) {

@@ -4,7 +4,7 @@
 
 typedef struct {
     double position;       /* [m] integral of speed */
-    int stage;             /* 1 before event_time, 2 from it on */
+    int stage;             /* 1 before stage_time, 2 from it on */
     int pending_stage;     /* the event was reached with early return: stage 2 is set in event mode */
     int pending_terminate; /* the terminate request is made in event mode */
 } ModelState;
