@@ -209,7 +209,7 @@ def cmd_run_fmu(args: argparse.Namespace) -> int:
 
     out = args.out or Path("results") / plant_name(args.fmu)
     result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, out=out,
-                     formats=("vcd", args.format))
+                     formats=("vcd", args.format), progress=True)
     print(result.table())
     print(f"results in {out}/ (result.json, trace.vcd, {args.format} tables: every numeric output on the grid)")
     return _exit_status(result)

@@ -210,7 +210,7 @@ def plant_name(path: Path) -> str:
 
 def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: str | None = None,
             step: str | None = None, out: str | Path | None = None,
-            formats: tuple[str, ...] = ("vcd", "parquet")) -> Any:
+            formats: tuple[str, ...] = ("vcd", "parquet"), progress: bool = False) -> Any:
     """Simulate one FMU alone and write the usual result folder (returns the :class:`~cosim.runner.Result`).
 
     Parameters
@@ -225,6 +225,10 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
         Output grid with unit (default: the default experiment step, else 1/500 of the run).
     out : path, optional
         Results folder.
+    formats : tuple of str
+        Trace files to write (see :func:`cosim.export.write_trace`).
+    progress : bool
+        Show a progress bar for runs longer than two seconds (on a terminal only).
 
     The run starts at 0 s (a default experiment's start time is not used). Integer, Boolean and
     enumeration outputs are recorded as numbers; strings and binaries are not recorded.
@@ -281,4 +285,4 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
                    for (name, value), text in zip(values.items(), (sets or {}).values(), strict=True))
     scenario_file = ScenarioFile(name=device, path=path.resolve(), description=f"{path.name} alone",
                                  parameters=params, until=end, function=scenario)
-    return run_scenario(scenario_file, until=end, out=out, formats=formats)
+    return run_scenario(scenario_file, until=end, out=out, formats=formats, progress=progress)

@@ -290,7 +290,7 @@ class Plant:
             raise ConfigurationError(f"{self.name}.{variable} is a {var.type}{var.dimensions} variable: a watched "
                                      "output must be a number or a Boolean (a signal carries one)")
         name = signal or f"{self.name}.{variable}"
-        out = Signal(self.sim, name, kind=kind, initial=_number(self.fmu.get(variable)),
+        out = Signal(self.sim, name, kind=kind, initial=_number(self.fmu.get(variable)), unit=var.unit,
                      description=f"{self.name} output {variable}")
         if not self._watched:
             self.sim.add_look_ahead(self._look_ahead)

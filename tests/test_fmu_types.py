@@ -152,8 +152,10 @@ def test_a_watched_output_changes_at_the_event(fmi_version: int, grid: int | Non
         for refused in ("text_out", "vec_out") if fmi_version == 3 else ("text_out",):
             with pytest.raises(ConfigurationError, match="a watched output must be a number or a Boolean"):
                 plant.watch(refused)
+        moving = plant.watch("position", signal="types.watched_position", kind="real")
         sim.run(until=300 * MS)
         assert sim.trace.edges(stage.name)[0].tolist() == [0, 200 * MS]
+        assert sim.trace.info[moving.name].unit == "m"  # the FMU's declared unit
 
 
 # -- a plant that ends the run --------------------------------------------------------------------------
