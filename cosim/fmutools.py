@@ -230,6 +230,8 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
     progress : bool
         Show a progress bar for runs longer than two seconds (on a terminal only).
 
+    Notes
+    -----
     The run starts at 0 s (a default experiment's start time is not used). Integer, Boolean and
     enumeration outputs are recorded as numbers; strings and binaries are not recorded.
     """
