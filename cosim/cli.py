@@ -1,7 +1,9 @@
 """The ``cosim`` command line.
 
 Exit status: 0 when every check passed, 1 when a check failed or a run broke, 2 for usage or
-configuration errors (a parameter out of range, an unknown scenario, a broken script).
+configuration errors (a parameter out of range, an unknown scenario, a broken script), 3 when a
+plant FMU ended the run early (verdict TERMINATED: not a failure of the checks, which all passed
+up to that instant).
 
 Each sub-command is two small functions, ``_args_<name>(parser)`` (its arguments) and
 ``cmd_<name>(args) -> exit status``, and one line in :data:`COMMANDS`. Command functions import
@@ -16,11 +18,14 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from cosim import __version__
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
 
-EXIT_PASS, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
+EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED = 0, 1, 2, 3
+EPILOG = ("Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error, "
+          "3 a plant FMU ended the run early (TERMINATED; the checks up to then passed).")
 #: How many failing sweep runs are listed with their reason before the rest is only counted.
 SHOWN_FAILURES = 5
 
@@ -101,9 +106,13 @@ def cmd_run(args: argparse.Namespace) -> int:
                           out=out, formats=formats, progress=True)
     print(result.table())
     print(f"results in {out}/ (result.json, {'trace.vcd, ' if not args.no_vcd else ''}{args.format} tables)")
+    return _exit_status(result)
+
+
+def _exit_status(result: Any) -> int:
     if result.error_kind == "configuration":
         return EXIT_USAGE
-    return EXIT_PASS if result.verdict == "PASS" else EXIT_FAIL
+    return {"PASS": EXIT_PASS, "TERMINATED": EXIT_TERMINATED}.get(result.verdict, EXIT_FAIL)
 
 
 def _args_check_machine(parser: argparse.ArgumentParser) -> None:
@@ -197,6 +206,51 @@ def cmd_check(args: argparse.Namespace) -> int:
     total = len(models) * len(fmubuild.FMI_VERSIONS)
     print(f"{total - bad} of {total} FMUs valid (fmpy's validator) in {fmubuild.MODELS_DIR}")
     return EXIT_FAIL if bad else EXIT_PASS
+
+
+def _args_fmu_info(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("fmu", type=Path, help="the .fmu file")
+    parser.add_argument("--json", action="store_true", help="print everything as JSON")
+
+
+def cmd_fmu_info(args: argparse.Namespace) -> int:
+    from cosim.fmutools import fmu_info, format_info
+
+    info = fmu_info(args.fmu)
+    if args.json:
+        from cosim.runner import to_json
+
+        print(to_json(info.as_dict()))
+    else:
+        print(format_info(info), end="")
+    return EXIT_PASS
+
+
+def _args_run_fmu(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("fmu", type=Path, help="the .fmu file (co-simulation, FMI 2.0 or 3.0)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
+                        help="start value of a parameter or input (repeatable; arrays: 1,2,3; enumerations: "
+                             "the item name; binaries: hex)")
+    parser.add_argument("--until", default=None,
+                        help="end time with unit, e.g. '2 s' (default: the FMU's default experiment, else 1 s)")
+    parser.add_argument("--step", default=None,
+                        help="output grid with unit, e.g. '1 ms' (default: the default experiment's step size, "
+                             "else 1/500 of the run)")
+    _folder_completion(parser.add_argument("--out", type=Path, default=None,
+                                           help="results folder (default results/<fmu name>)"))
+    parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
+                        help="format of the trace tables (default parquet)")
+
+
+def cmd_run_fmu(args: argparse.Namespace) -> int:
+    from cosim.fmutools import plant_name, run_fmu
+
+    out = args.out or Path("results") / plant_name(args.fmu)
+    result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, out=out,
+                     formats=("vcd", args.format), progress=True)
+    print(result.table())
+    print(f"results in {out}/ (result.json, trace.vcd, {args.format} tables: every numeric output on the grid)")
+    return _exit_status(result)
 
 
 # -- sweep ----------------------------------------------------------------------------------------
@@ -305,7 +359,8 @@ COMMANDS: tuple[Command, ...] = (
                         "with --machine, a program on a machine), print the check table and write result.json, "
                         "trace.vcd and tables.",
             epilog="examples: cosim run laser_pwm --set pwm_on=200; cosim run examples/pokeys_mill/mill.toml "
-                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml"),
+                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml. "
+                   + EPILOG),
     Command("check-machine", cmd_check_machine, "check a machine file: build the machine without running it",
             arguments=_args_check_machine,
             description="Read MACHINE.toml, check every key, load its programs and FMUs and join the couplings, "
@@ -320,6 +375,20 @@ COMMANDS: tuple[Command, ...] = (
                         "In a source checkout they go to models/; an installed cosim keeps them in a per-user "
                         "cache. Prints one line per FMU and where they are."),
     Command("check-fmus", cmd_check, "validate the built FMUs with fmpy's validator (builds missing ones first)"),
+    Command("fmu-info", cmd_fmu_info, "what is in an FMU: variables, units, ranges, and the couplings it can serve",
+            arguments=_args_fmu_info,
+            description="Read an FMU file (nothing is run): FMI version, interfaces, every variable (type, "
+                        "causality, variability, unit, start, range, dimensions), default experiment, the "
+                        "platforms it has binaries for, and for each coupling whether its roles are found "
+                        "under the bundled FMUs' names or which ones to map with variables={role: name}."),
+    Command("run-fmu", cmd_run_fmu, "simulate one FMU alone (like fmpy's simulate_fmu) into a result folder",
+            arguments=_args_run_fmu,
+            description="Simulate one co-simulation FMU with the master, start values from --set, every "
+                        "numeric output recorded on a grid (0, step, 2 step, ... and the end), and write the "
+                        "usual result folder (result.json, trace.vcd, tables). An FMU that asks to end the "
+                        "simulation ends the run there (verdict TERMINATED, exit status 3).",
+            epilog="example: cosim run-fmu models/fmi3/Stepper.fmu --set step_rate=2000 --until '50 ms' "
+                   "--step '1 ms'"),
     Command("sweep", cmd_sweep, "run a scenario over a parameter grid and/or seeded random samples, on Dask",
             arguments=_args_sweep,
             description="Run SCENARIO for every combination of --grid values, times --samples random draws of "
@@ -346,7 +415,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="cosim",
         description="Co-simulation workbench for motion-controller timing: run scenarios, check timing, "
                     "sweep parameters, build and validate the plant FMUs.",
-        epilog="Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error.",
+        epilog=EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
