@@ -155,6 +155,14 @@ class WatchedTrace(Trace):
             self.pulse_watches[name].segment(t, 1, 1, direction)
 
 
+def _comparator(port: Port) -> Callable[[float], float]:
+    """The output's value from its source's value: the value itself, or a comparator's 1.0 / 0.0."""
+    below, above = port.below, port.above
+    if below is None and above is None:
+        return lambda value: value
+    return lambda value: float((below is None or value < below) and (above is None or value > above))
+
+
 def machine_document(values: dict[str, Any], *, plants: str) -> dict[str, Any]:
     """The part of a machine document an FMU builds: no export, checks or figures (no plants when outside)."""
     document = {k: copy.deepcopy(v) for k, v in values.items() if k not in NOT_BUILT}
@@ -205,7 +213,10 @@ class ExportedMachine:
             raise
         self._input_signals: list[Signal] = [{s.name: s for s in controller.inputs()}[p.source] for p in self.inputs]
         self._readers = [self._reader(p) for p in self.outputs]
-        self._events = {p.source for p in self.outputs if p.event}
+        self._events: dict[str, list[Callable[[float], float]]] = {}
+        for port in self.outputs:
+            if port.event:
+                self._events.setdefault(port.source, []).append(_comparator(port))
         self._late: set[str] = set()
         self.warnings: list[str] = []
         self._t_start = 0
@@ -226,15 +237,8 @@ class ExportedMachine:
             plant = next(p for p in self.run.plants if p.name == plant_name)
             return lambda left: float(plant.read(variable))
         watch = trace.watches[port.source]
-        if port.below is None and port.above is None:
-            return lambda left: watch.at(sim.now, left=left)
-        below, above = port.below, port.above
-
-        def compare(left: bool) -> float:
-            value = watch.at(sim.now, left=left)
-            return float((below is None or value < below) and (above is None or value > above))
-
-        return compare
+        level = _comparator(port)
+        return lambda left: level(watch.at(sim.now, left=left))
 
     def values(self, *, left: bool = False) -> list[float]:
         """Every output now: after the events of this instant, or just before them (``left``)."""
@@ -296,6 +300,9 @@ class ExportedMachine:
                                  "the controller model records it after the fact, so the FMU reports it late")
         if name not in self._events or t != now or t <= self._t_start:
             return
+        watch = self.trace.watches[name]
+        if all(level(watch.before) == level(watch.value) for level in self._events[name]):
+            return  # (a comparator that did not flip, or a value set back within the instant)
         if self._event_t is None or t < self._event_t:
             self._event_t = t
             if self._early and t < self._stop_at:
