@@ -105,14 +105,14 @@ def read_spec(document: dict[str, Any], *, file: Path) -> ExportSpec:
     step = table.raw("step", "1 ms")
     if isinstance(step, bool) or not isinstance(step, str | int):
         raise table.error("step", step, "a time with a unit, e.g. \"1 ms\"")
-    outputs = _entries(table, "outputs", required=True)
-    inputs = _entries(table, "inputs", required=False)
-    table.finish()
+    raw_outputs, raw_inputs = table.raw("outputs", None), table.raw("inputs", [])
+    table.finish()  # a misspelt key first: "outptus" is better said as such than as "outputs is missing"
+    outputs = _entries(table, "outputs", raw_outputs, required=True)
+    inputs = _entries(table, "inputs", raw_inputs, required=False)
     return ExportSpec(plants=plants, step=step, outputs=outputs, inputs=inputs)
 
 
-def _entries(table: Table, key: str, *, required: bool) -> tuple[Table, ...]:
-    raw = table.raw(key, [] if not required else None)
+def _entries(table: Table, key: str, raw: Any, *, required: bool) -> tuple[Table, ...]:
     if raw is None or (required and raw == []):
         raise ConfigurationError(f"{table.file}: export.{key} is missing (required: a list of signal names, "
                                  "e.g. [\"trio.axis3.gate\", \"trio.axis3.step\"])")
