@@ -68,6 +68,26 @@ def ensure_venv(extras: str = "dev,docs") -> None:
     STAMP.write_text(wanted + "\n")
 
 
+#: The C importer the tests run exported machine FMUs in (a program without Python): the ecos co-simulation
+#: engine's command line (ecospy wheel) and the TBB runtime it links (tbb wheel), both from PyPI, kept
+#: apart from the project's packages in .venv/c-importer (ecos in Scripts/, libtbb in lib/).
+C_IMPORTER = VENV / "c-importer"
+C_IMPORTER_PACKAGES = ("ecospy==0.7.2", "tbb==2023.2.0")
+
+
+def ensure_c_importer() -> None:
+    """Install the C importer once (a second run finds it and does nothing)."""
+    ecos = C_IMPORTER / "Scripts" / "ecos"
+    stamp = C_IMPORTER / ".stamp"
+    wanted = " ".join(C_IMPORTER_PACKAGES)
+    if ecos.exists() and stamp.exists() and stamp.read_text().strip() == wanted:
+        return
+    _say(f"installing the C importer for the FMU export tests ({wanted}) into {C_IMPORTER}")
+    _run(PY, "-m", "pip", "install", "--quiet", "--no-deps", "--prefix", C_IMPORTER, *C_IMPORTER_PACKAGES)
+    ecos.chmod(0o755)
+    stamp.write_text(wanted + "\n")
+
+
 def main_job(args: list[str]) -> None:
     ensure_venv()
     _run(BIN / "cosim", "main", *args)
@@ -77,6 +97,7 @@ def test_job(args: list[str]) -> None:
     ensure_venv()
     _say("building FMUs that are missing or older than their sources")
     _run(PY, "-m", "cosim.fmubuild", "--quiet")
+    ensure_c_importer()
     _say("ruff")
     _run(PY, "-m", "ruff", "check", "cosim", "tests", "bench", "docs", "tasks.py")
     _say("mypy")

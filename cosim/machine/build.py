@@ -35,6 +35,7 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
     machine = document.table("machine", required=True)
     for key in ("name", "description", "until", "resolution"):
         machine.raw(key, None)  # read by the loader
+    document.raw("export", None)  # the FMU's inputs and outputs: read by `cosim export-fmu` (cosim.fmu_export)
     controller_table = document.table("controller", required=True)
     family_name = controller_table.text("family", choices=sorted(families()))
     family: Family = families()[family_name]
