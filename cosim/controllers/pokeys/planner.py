@@ -19,11 +19,10 @@ from fractions import Fraction
 from cosim.controllers.pokeys.buffer import Entry, encode_entry
 from cosim.controllers.pokeys.config import FASTEST_RATE_HZ, AxisConfig, rate_hz
 from cosim.controllers.pokeys.limits import AXIS_NAMES, SLOTS_PER_S
-from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
+from cosim.controllers.pokeys.profile import SlotLimits
+from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
 from cosim.validate import integer, positive
-
-Counts = tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -84,19 +83,9 @@ def plan_move(start: Sequence[int], move: Move, axes: Sequence[AxisConfig]) -> l
         limit = positive(move.accel, "Move accel", unit="pulses/s^2") / SLOTS_PER_S**2
         accel, decel = min(accel, limit), min(decel, limit)
     limits = SlotLimits.exact(vmax, accel, decel)
-    path = AxisMotion(limits, position=0)
-    path.move_to(dominant)
-    den = dominant * limits.scale
-    axes_sd = [(-1 if d < 0 else 1, abs(d)) for d in deltas]  # truncate towards the start: symmetric
-    slots: list[Counts] = []
-    before: tuple[int, ...] = (0,) * len(deltas)
-    while not path.done:
-        path.step()
-        now = tuple(sign * (dist * path.p // den) for sign, dist in axes_sd)
-        slots.append(tuple(n - b for n, b in zip(now, before, strict=True)))
-        before = now
-    return slots
-
+    segment = Segment(tuple(start), tuple(move.target), dominant * limits.scale, limits.vmax, limits.accel,
+                      limits.decel)
+    return profile_chain([segment])
 
 def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
          start: Sequence[int] | None = None) -> list[Counts]:
