@@ -53,10 +53,12 @@ from cosim.errors import ConfigurationError
 from cosim.machine.document import Table
 from cosim.machine.families.pokeys_figures import declare_figures
 from cosim.scenario import Run
+from cosim.validate import positive
 
 AXIS_KEYS = ("max_speed_hz", "accel", "decel", "limit_pos_enabled", "limit_neg_enabled", "home_enabled",
              "invert_direction", "invert_homing")
-HOST_AXIS_KEYS = ("steps_per_unit", "max_velocity", "max_accel")
+HOST_AXIS_UNITS = {"steps_per_unit": "steps/unit", "max_velocity": "units/s", "max_accel": "units/s^2"}
+HOST_AXIS_KEYS = tuple(HOST_AXIS_UNITS)
 GCODE_AXES = ("x", "y", "z")
 
 
@@ -93,6 +95,8 @@ class PoKeysFamily:
                 host = {key: axis.number(key) for key in HOST_AXIS_KEYS if axis.has(key)}
                 self.host_axes[name] = host
                 with axis.at():
+                    for key, value in host.items():
+                        positive(value, key, unit=HOST_AXIS_UNITS[key])
                     values.update(_engine_limits(host, values, defaults.device.max_rate_hz))
             with axes.at(name):
                 built.append(AxisConfig(**{**_fields(default), **values, "name": name}))

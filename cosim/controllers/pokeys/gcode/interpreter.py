@@ -7,10 +7,11 @@ speed 0, no ``G92`` offset. Within a line the words act in RS274/NGC's order: ``
 ``M2``/``M30``. Coordinates and feeds are converted to machine units exactly (1 inch = 25.4 mm).
 
 Errors (``FILE:LINE: reason``), before anything runs: a feed move (``G1``, ``G2``, ``G3``) with no
-feed rate yet or ``F0``; axis words with no motion mode; an arc whose end point is more than
-:data:`ARC_RADIUS_TOLERANCE_MM` off its circle (IJ form), whose radius cannot reach its end point
-or that would be a full circle (R form), or with a zero radius; ``G4`` without ``P`` or with a
-negative ``P``; ``G92`` without axis words; two commands that both want the axis words.
+feed rate yet or ``F0``; axis words with no motion mode; an arc whose end point is off its circle
+by more than :data:`ARC_RADIUS_TOLERANCE_MM` (:data:`ARC_RADIUS_TOLERANCE_INCH` in an inch
+program; IJ form), whose radius cannot reach its end point or that would be a full circle (R
+form), or with a zero radius; ``G4`` without ``P`` or with a negative ``P``; ``G92`` without axis
+words; two commands that both want the axis words.
 """
 
 from __future__ import annotations
@@ -26,8 +27,10 @@ from cosim.errors import ConfigurationError
 MM_PER_INCH = Fraction(254, 10)
 UNITS = ("mm", "inch")
 ARC_RADIUS_TOLERANCE_MM = Fraction(5, 1000)
-"""How far an arc's end may be off the circle through its start [mm] (LinuxCNC's default 0.005 mm, 0.0005 in);
-the radius then changes linearly along the arc so that the arc ends exactly at its end point."""
+"""How far an arc's end may be off the circle through its start in a millimetre program [mm] (LinuxCNC's
+``TOLERANCE_MM``); the radius then changes linearly along the arc so that it ends exactly at its end point."""
+ARC_RADIUS_TOLERANCE_INCH = Fraction(5, 10000)
+"""The same in an inch program [in] (LinuxCNC's ``TOLERANCE_INCH``)."""
 AXES = "XYZ"
 SPINDLE_OFF = Spindle(False, False, Fraction(0), 0)
 
@@ -40,12 +43,12 @@ class _State:
     feed: Fraction | None = None  # program units per minute
     spindle: Spindle = SPINDLE_OFF
     offset: Point = (Fraction(0), Fraction(0), Fraction(0))  # machine = program + offset
-    machine_mm: Fraction = Fraction(1)  # millimetres per machine unit
+    inch: bool = False  # the program's units are inches
 
     @property
     def tolerance(self) -> Fraction:
         """The arc radius tolerance in machine units."""
-        return ARC_RADIUS_TOLERANCE_MM / self.machine_mm
+        return (ARC_RADIUS_TOLERANCE_INCH if self.inch else ARC_RADIUS_TOLERANCE_MM) * self.scale
 
 
 def interpret(blocks: Blocks, *, units: str = "mm") -> Toolpath:
@@ -53,7 +56,7 @@ def interpret(blocks: Blocks, *, units: str = "mm") -> Toolpath:
     if units not in UNITS:
         raise ConfigurationError.out_of_range("units", units, ", ".join(UNITS))
     machine_mm = Fraction(1) if units == "mm" else MM_PER_INCH
-    state = _State(machine_mm=machine_mm)
+    state = _State(inch=units == "inch")
     position: Point = (Fraction(0), Fraction(0), Fraction(0))
     steps: list[Step] = []
     for block in blocks.blocks:
@@ -107,7 +110,7 @@ def _block(block: Block, state: _State, position: Point, steps: list[Step],
     for code in g:
         if code in (20, 21):
             program_mm = MM_PER_INCH if code == 20 else Fraction(1)
-            state = replace(state, scale=program_mm / machine_mm)
+            state = replace(state, scale=program_mm / machine_mm, inch=code == 20)
         elif code in (90, 91):
             state = replace(state, incremental=code == 91)
         elif code in (0, 1, 2, 3):

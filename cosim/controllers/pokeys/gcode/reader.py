@@ -171,10 +171,11 @@ def _syntax(exc: UnexpectedInput, raw: str) -> str:
         return f"unexpected {char!r} at column {column} ({hint})"
     if isinstance(exc, UnexpectedToken | UnexpectedEOF):
         token = getattr(exc, "token", None)
-        before = raw[:column - 1].rstrip() if column else raw.rstrip()
+        at_end = token is None or token.type == "$END"
+        before = raw.rstrip() if at_end or not column else raw[:column - 1].rstrip()
         letter = before[-1:] if before else ""
         if letter.isalpha():
-            found = "the end of the line" if token is None or token.type == "$END" else repr(str(token))
+            found = "the end of the line" if at_end else repr(str(token))
             return f"the letter {letter.upper()!r} at column {len(before)} is followed by {found}, not a number " \
                    "(a word is a letter and a number, e.g. G1 or X-2.5)"
         return f"{str(token)!r} at column {column} is not a word (a word is a letter and a number, e.g. G1 or X-2.5)"
