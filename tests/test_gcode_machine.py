@@ -184,3 +184,13 @@ def test_the_router_example_runs_its_gcode_pocket_and_passes(tmp_path: Path) -> 
     assert slower.verdict == "PASS", slower.table()
     # the feeds take 1.25 times as long; rapids, the dwell and the corners (at the axes' limits) do not change
     assert 1.1 * figures["job_s"] < slower.figures["job_s"]["value"] < 1.25 * figures["job_s"]
+
+
+@pytest.mark.fmu
+def test_blending_corners_with_a_large_tolerance_is_faster_and_the_steppers_lose_steps() -> None:
+    """path_tolerance 0.5 mm: a 90 deg corner at v^2 = 1500 mm/s^2 x 0.5 mm x s/(1-s), s = sin 45 deg: 42.6 mm/s
+    (13.6 kHz), a speed step within one slot that the 6 kg x carriage's NEMA 23 cannot follow."""
+    result = run_scenario(load_machine(ROUTER), overrides={"path_tolerance": "0.5"})
+    failed = sorted(c["name"] for c in result.checks if not c["passed"])
+    assert failed == ["x stepper lost no step", "y stepper lost no step"], result.table()
+    assert result.figures["stepper_x_lost_steps"]["value"] > 100 and result.figures["job_s"]["value"] < 17

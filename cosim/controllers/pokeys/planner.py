@@ -8,6 +8,10 @@ maximum speed, acceleration and deceleration, so no axis count of a slot exceeds
 speed (25 pulses at 25 kHz) and the counts of a move add up to its distances exactly (the
 remainder is carried, never rounded away). Moves start and end at rest. A job has as many axes as
 the configurations given (3 for the 56 series, up to 8).
+
+It is one planner: a move is a one-segment chain of :mod:`~cosim.controllers.pokeys.trajectory`,
+the same speed rule that plans G-code tool paths (:func:`plan_toolpath`, from
+:mod:`~cosim.controllers.pokeys.pathplan`, re-exported here).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ from fractions import Fraction
 from cosim.controllers.pokeys.buffer import Entry, encode_entry
 from cosim.controllers.pokeys.config import FASTEST_RATE_HZ, AxisConfig, rate_hz
 from cosim.controllers.pokeys.limits import AXIS_NAMES, SLOTS_PER_S
+from cosim.controllers.pokeys.pathplan import HostAxis, PathSettings, PlannedJob, plan_toolpath
 from cosim.controllers.pokeys.profile import SlotLimits
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
@@ -120,3 +125,7 @@ def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
                 negative[a] = c < 0
         entries.append(encode_entry(slot, negative=negative))
     return entries
+
+
+__all__ = ["Counts", "Dwell", "HostAxis", "Move", "PathSettings", "PlannedJob", "plan", "plan_move", "plan_toolpath",
+           "to_entries"]
