@@ -178,7 +178,8 @@ def programs(draw: st.DrawFn) -> str:
     return "\n".join(lines) + "\n"
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=50, deadline=None, database=None, derandomize=True,  # the same 50 programs every run
+          suppress_health_check=[HealthCheck.too_slow])
 @given(text=programs(), mode=st.sampled_from(MODES), spu=st.sampled_from([80, 200, 320, 400, 1600]),
        velocity=st.integers(5, 200), accel=st.integers(50, 5000))
 def test_no_slot_exceeds_the_engine_limit_and_every_program_ends_exactly(text: str, mode: str, spu: int,
@@ -194,4 +195,5 @@ def test_no_slot_exceeds_the_engine_limit_and_every_program_ends_exactly(text: s
         step = math.ceil(Fraction(spu * accel, 10**6)) + 1
         for axis in range(3):
             counts = [slot[axis] for slot in job.counts]
-            assert all(abs(b - a) <= step for a, b in pairwise(counts))
+            # a reversal at an exact stop: the last slot of one segment (<= decel) meets the first of the next
+            assert all(abs(b - a) <= (step if a * b >= 0 else 2 * step) for a, b in pairwise(counts))

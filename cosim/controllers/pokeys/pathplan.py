@@ -45,6 +45,7 @@ from math import isqrt
 from cosim.controllers.pokeys.limits import AXIS_NAMES, MAX_PULSES_PER_SLOT, SLOTS_PER_S
 from cosim.controllers.pokeys.toolpath import Arc, Line, Pause, Point, Spindle, Toolpath
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
+from cosim.errors import ConfigurationError
 from cosim.validate import choice, in_range, integer, positive
 
 QUANTA_PER_UNIT = 10**9
@@ -161,8 +162,8 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
     ([0, 0, 0], (0, 0, 0))
     """
     settings = settings or PathSettings()
-    if len(axes) != 3:
-        raise ValueError(f"a tool path plans the x, y, z axes: got {len(axes)} axes")
+    if len(axes) != 3 or not all(isinstance(a, HostAxis) for a in axes):
+        raise ConfigurationError.out_of_range("tool path axes", len(axes), "3 HostAxis (x, y, z)")
     integer(max_pulses_per_slot, "max_pulses_per_slot", low=1, high=127, unit="pulses")
     integer(n_axes, "n_axes", low=3, high=len(AXIS_NAMES))
     builder = _Builder(toolpath, list(axes), settings, max_pulses_per_slot, n_axes)

@@ -33,6 +33,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from cosim.controllers.pokeys.profile import fastest_arriving
+from cosim.errors import ConfigurationError
+from cosim.validate import integer
 
 Counts = tuple[int, ...]
 
@@ -63,8 +65,11 @@ class Segment:
     corner: int = 0
 
     def __post_init__(self) -> None:
-        if self.length < 1 or self.vmax < 1 or self.accel < 1 or self.decel < 1 or self.corner < 0:
-            raise ValueError(f"segment limits must be >= 1 (corner >= 0): {self}")
+        for name in ("length", "vmax", "accel", "decel"):
+            integer(getattr(self, name), f"segment {name}", low=1)
+        integer(self.corner, "segment corner", low=0)
+        if len(self.start) != len(self.end):
+            raise ConfigurationError.out_of_range("segment end axes", len(self.end), f"{len(self.start)} (as start)")
 
 
 def corner_speeds(segments: Sequence[Segment]) -> list[int]:
