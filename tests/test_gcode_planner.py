@@ -16,12 +16,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from cosim.controllers.pokeys import PulseEngine
 from cosim.controllers.pokeys.config import uniform_axes
 from cosim.controllers.pokeys.gcode import read_program
+from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.pathplan import HostAxis, PathSettings, plan_toolpath
-from cosim.controllers.pokeys.planner import Move, plan
+from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.controllers.pokeys.trajectory import Segment, profile_chain
 from cosim.errors import ConfigurationError
+from cosim.kernel import Simulation
 
 AXES = [HostAxis(400, 100, 1000, name=a) for a in "xyz"]  # 400 steps/mm, 100 mm/s (above 25 kHz), 1000 mm/s^2
 MODES = ("exact_stop", "blend")
@@ -56,6 +59,19 @@ def test_final_step_positions_equal_the_program_end_point(name: str, mode: str) 
     assert job.end_steps == end
     assert _ends(job.counts) == end
     assert max(abs(c) for slot in job.counts for c in slot) <= 25
+
+
+@pytest.mark.parametrize("mode", MODES)
+@pytest.mark.parametrize("name", sorted(PROGRAMS))
+def test_the_engine_counters_end_on_the_program_end_point(name: str, mode: str) -> None:
+    """The same programs streamed over USB into a 56E: the position counters end on the end point."""
+    text, end = PROGRAMS[name]
+    job = _plan(text, mode)
+    with Simulation(seed=3) as sim:
+        engine = PulseEngine(sim)
+        host = HostApp(sim, engine, to_entries(job.counts), link="usb", prefill_slots=64)
+        sim.run(until=(len(job.counts) + 200) * 1_000_000)
+        assert host.finished and engine.underruns == [] and engine.status().positions == end
 
 
 def test_incremental_moves_accumulate_exact_positions_not_rounded_steps() -> None:
