@@ -134,6 +134,7 @@ def test_spindle_words_and_dwell_become_records_and_m2_ends_the_program() -> Non
     ("G4 P-1\n", r"^p.nc:1: G4 P-1: the dwell time is >= 0 s"),
     ("G0 G4 P1 X3\n", r"^p.nc:1: G4 with axis words: a dwell does not move"),
     ("G92\n", r"^p.nc:1: G92 needs axis words"),
+    ("G1 X1 P2 F10\n", r"^p.nc:1: P without G4: P is the dwell time of G4"),
     ("G1 X1 I2 F10\n", r"^p.nc:1: I, J or R on a straight move \(G1\)"),
     ("G0 X1\nI2\n", r"^p.nc:2: I, J or R without an arc"),
 ])

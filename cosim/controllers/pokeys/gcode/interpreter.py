@@ -107,6 +107,8 @@ def _block(block: Block, state: _State, position: Point, steps: list[Step],
         if axis_words:
             raise _Refused("G4 with axis words: a dwell does not move")
         steps.append(Pause(seconds, block.line))
+    elif block.get("P") is not None:
+        raise _Refused("P without G4: P is the dwell time of G4")
     for code in g:
         if code in (20, 21):
             program_mm = MM_PER_INCH if code == 20 else Fraction(1)
