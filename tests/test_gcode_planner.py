@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import doctest
 import math
 from fractions import Fraction
 from itertools import accumulate, pairwise
@@ -16,7 +17,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cosim.controllers.pokeys import PulseEngine
+from cosim.controllers.pokeys import PulseEngine, pathplan, planner, profile
 from cosim.controllers.pokeys.config import uniform_axes
 from cosim.controllers.pokeys.gcode import read_program
 from cosim.controllers.pokeys.host import HostApp
@@ -142,6 +143,12 @@ def test_dwell_and_spindle_changes_stop_the_path_and_mark_their_slot() -> None:
     first_move_end = max(i for i in moving if i < off_at) + 1
     assert off_at == first_move_end + 250 and not any(any(c) for c in job.counts[first_move_end:off_at])
     assert not off.on and speed_at == len(job.counts) and speed.speed == 200
+
+
+@pytest.mark.parametrize("module", [pathplan, profile, planner])
+def test_the_docstring_examples_hold(module: object) -> None:
+    failures, tried = doctest.testmod(module)  # type: ignore[arg-type]
+    assert failures == 0 and tried > 0
 
 
 def test_bad_planner_settings_are_refused() -> None:

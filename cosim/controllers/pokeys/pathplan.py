@@ -156,10 +156,10 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
     Examples
     --------
     >>> from cosim.controllers.pokeys.gcode import read_program
-    >>> path = read_program("G21 G90 G1 X10 Y5 F600 G0 X0 Y0 M2")
+    >>> path = read_program("G21 G90\\nG1 X10 Y5.0013 F600\\nM2")
     >>> job = plan_toolpath(path, [HostAxis(400, 50, 500, name=a) for a in "xyz"])
-    >>> [sum(c[a] for c in job.counts) for a in range(3)], job.end_steps
-    ([0, 0, 0], (0, 0, 0))
+    >>> [sum(c[a] for c in job.counts) for a in range(3)], job.end_steps   # 5.0013 mm x 400 = 2000.52
+    ([4000, 2001, 0], (4000, 2001, 0))
     """
     settings = settings or PathSettings()
     if len(axes) != 3 or not all(isinstance(a, HostAxis) for a in axes):
