@@ -109,6 +109,8 @@ class SlotBuffer:
     def __init__(self, depth_slots: int = BUFFER_SLOTS) -> None:
         self.depth_slots = integer(depth_slots, "buffer depth", low=1, high=65535, unit="slots")
         self._slots: deque[Entry] = deque()
+        self.taken = 0
+        """Entries taken from the buffer so far (the host's job follows its slots by this count)."""
 
     @property
     def level(self) -> int:
@@ -133,7 +135,10 @@ class SlotBuffer:
 
     def pop(self) -> Entry | None:
         """The oldest entry, or None if the buffer is empty."""
-        return self._slots.popleft() if self._slots else None
+        if not self._slots:
+            return None
+        self.taken += 1
+        return self._slots.popleft()
 
     def clear(self) -> int:
         """Drop every queued entry (clear-buffer command); return how many were dropped."""

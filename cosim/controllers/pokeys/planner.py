@@ -8,6 +8,10 @@ maximum speed, acceleration and deceleration, so no axis count of a slot exceeds
 speed (25 pulses at 25 kHz) and the counts of a move add up to its distances exactly (the
 remainder is carried, never rounded away). Moves start and end at rest. A job has as many axes as
 the configurations given (3 for the 56 series, up to 8).
+
+It is one planner: a move is a one-segment chain of :mod:`~cosim.controllers.pokeys.trajectory`,
+the same speed rule that plans G-code tool paths (:func:`plan_toolpath`, from
+:mod:`~cosim.controllers.pokeys.pathplan`, re-exported here).
 """
 
 from __future__ import annotations
@@ -19,11 +23,11 @@ from fractions import Fraction
 from cosim.controllers.pokeys.buffer import Entry, encode_entry
 from cosim.controllers.pokeys.config import FASTEST_RATE_HZ, AxisConfig, rate_hz
 from cosim.controllers.pokeys.limits import AXIS_NAMES, SLOTS_PER_S
-from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits
+from cosim.controllers.pokeys.pathplan import HostAxis, PathSettings, PlannedJob, plan_toolpath
+from cosim.controllers.pokeys.profile import SlotLimits
+from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
 from cosim.validate import integer, positive
-
-Counts = tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -84,19 +88,9 @@ def plan_move(start: Sequence[int], move: Move, axes: Sequence[AxisConfig]) -> l
         limit = positive(move.accel, "Move accel", unit="pulses/s^2") / SLOTS_PER_S**2
         accel, decel = min(accel, limit), min(decel, limit)
     limits = SlotLimits.exact(vmax, accel, decel)
-    path = AxisMotion(limits, position=0)
-    path.move_to(dominant)
-    den = dominant * limits.scale
-    axes_sd = [(-1 if d < 0 else 1, abs(d)) for d in deltas]  # truncate towards the start: symmetric
-    slots: list[Counts] = []
-    before: tuple[int, ...] = (0,) * len(deltas)
-    while not path.done:
-        path.step()
-        now = tuple(sign * (dist * path.p // den) for sign, dist in axes_sd)
-        slots.append(tuple(n - b for n, b in zip(now, before, strict=True)))
-        before = now
-    return slots
-
+    segment = Segment(tuple(start), tuple(move.target), dominant * limits.scale, limits.vmax, limits.accel,
+                      limits.decel)
+    return profile_chain([segment])
 
 def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
          start: Sequence[int] | None = None) -> list[Counts]:
@@ -131,3 +125,7 @@ def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
                 negative[a] = c < 0
         entries.append(encode_entry(slot, negative=negative))
     return entries
+
+
+__all__ = ["Counts", "Dwell", "HostAxis", "Move", "PathSettings", "PlannedJob", "plan", "plan_move", "plan_toolpath",
+           "to_entries"]

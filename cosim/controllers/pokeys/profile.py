@@ -84,6 +84,34 @@ def fastest_stoppable(remaining: int, decel: int) -> int:
     return (remaining + decel * m * (m + 1) // 2) // (m + 1)
 
 
+def fastest_arriving(remaining: int, decel: int, speed: int) -> int:
+    """The largest speed ``u >= 0`` from which the slots faster than ``speed`` cover at most ``remaining``.
+
+    Decelerating ``decel`` per slot from ``u``, the slots with a speed above ``speed`` cover
+    ``T(u) = m*u - decel*m*(m-1)/2`` (``m`` of them); ``speed = 0`` is :func:`fastest_stoppable`.
+    The host planner brakes with it towards a corner that may be passed at ``speed``.
+
+    Examples
+    --------
+    >>> fastest_arriving(10, 1, 0), fastest_stoppable(10, 1)
+    (4, 4)
+    >>> fastest_arriving(10, 1, 3)  # 5, 4 cover 9 above 3; 6, 5, 4 would cover 15
+    5
+    """
+    if remaining <= 0:
+        return max(0, speed) if remaining == 0 else 0
+    if speed <= 0:
+        return fastest_stoppable(remaining, decel)
+    # m: the most slots above ``speed`` that end exactly at speed + m*decel within ``remaining``
+    b = 2 * speed + decel
+    m = (isqrt(b * b + 8 * decel * remaining) - b) // (2 * decel)
+    while m * speed + decel * m * (m + 1) // 2 > remaining:
+        m -= 1
+    while (m + 1) * speed + decel * (m + 1) * (m + 2) // 2 <= remaining:
+        m += 1
+    return max(speed + decel * m, (remaining + decel * m * (m + 1) // 2) // (m + 1))
+
+
 def speed_to_cover(v: int, remaining: int, limits: SlotLimits) -> int:
     """Next slot speed (>= 0) towards a target ``remaining`` ahead, from speed ``v`` (>= 0).
 

@@ -1,0 +1,104 @@
+"""Following a streamed job through the engine: when its slots run, and the outputs that go with them.
+
+The host knows where in its job a spindle (or laser) command falls: before slot ``n``. It
+switches the output when the engine takes that slot from the buffer, at that slot's start
+(priority ``HOST``, after the engine's ``SLOT``), so the output changes between the motion before
+the command and the motion after it, wherever underruns or the prefill have moved the job in
+time. :class:`JobWatch` also records when the job's first and last slots ran (its job time).
+
+It counts the entries the engine has taken (:attr:`~cosim.controllers.pokeys.buffer.SlotBuffer.taken`)
+and sleeps until the earliest slot start at which the next marked slot can be taken (one entry per
+slot at most), so it costs a few kernel events per mark, not one per slot.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Generator, Sequence
+from typing import Any
+
+from cosim.controllers.pokeys.engine import PulseEngine
+from cosim.controllers.pokeys.toolpath import Spindle
+from cosim.kernel import Simulation
+from cosim.signals import Signal
+from cosim.timebase import Priority
+from cosim.validate import integer
+
+
+class JobWatch:
+    """The slots of a job of ``slots`` entries as the engine runs them, and its spindle outputs.
+
+    Parameters
+    ----------
+    sim : Simulation
+    engine : PulseEngine
+        The engine the job is streamed into (its buffer's taken count must start at 0 with the job).
+    slots : int
+        Entries in the job.
+    outputs : sequence of (int, Spindle)
+        Spindle states and the index of the job slot they start at (``slots``: after the last one).
+
+    Attributes
+    ----------
+    t_first, t_last : int or None
+        Start of the slot that took the job's first and last entry [ticks].
+    spindle_on, spindle_ccw, spindle_speed : Signal
+        ``<engine>.spindle.on`` (M3/M4 = 1, M5 = 0), ``.ccw`` (M4), ``.speed`` (S).
+    """
+
+    def __init__(self, sim: Simulation, engine: PulseEngine, *, slots: int,
+                 outputs: Sequence[tuple[int, Spindle]] = ()) -> None:
+        self.sim = sim
+        self.engine = engine
+        self.slots = integer(slots, "job slots", low=0)
+        name = engine.name
+        self.spindle_on = Signal(sim, f"{name}.spindle.on", description="spindle (or laser) on: M3, M4; off: M5")
+        self.spindle_ccw = Signal(sim, f"{name}.spindle.ccw", description="spindle counter-clockwise (M4)")
+        self.spindle_speed = Signal(sim, f"{name}.spindle.speed", kind="real", description="spindle speed (S word)")
+        self.outputs = sorted(outputs, key=lambda item: item[0])
+        for index, _ in self.outputs:
+            integer(index, "output slot", low=0, high=self.slots)
+        self.t_first: int | None = None
+        self.t_last: int | None = None
+        if self.slots:
+            sim.process(self.follow_job())
+        else:
+            for _, spindle in self.outputs:
+                self._apply(spindle)
+
+    @property
+    def job_ticks(self) -> int | None:
+        """From the start of the job's first slot to the end of its last [ticks], once it has run."""
+        if self.t_first is None or self.t_last is None:
+            return None
+        return self.t_last + self.engine.slot_ticks - self.t_first
+
+    def follow_job(self) -> Generator[Any, Any, None]:
+        """SimPy process: wait for each marked slot to be taken; switch outputs, note first and last."""
+        last = self.slots - 1
+        pending = list(self.outputs)
+        for index in sorted({0, last} | {min(i, last) for i, _ in pending}):
+            t = yield from self._taken(index)
+            if index == 0:
+                self.t_first = t
+            if index == last:
+                self.t_last = t
+            while pending and pending[0][0] == index:
+                self._apply(pending.pop(0)[1])
+        if pending:  # after the job: at the start of the slot after its last one
+            yield self.sim.at(self.sim.now + self.engine.slot_ticks, Priority.HOST)
+            for _, spindle in pending:
+                self._apply(spindle)
+
+    def _taken(self, index: int) -> Generator[Any, Any, int]:
+        """Wait until entry ``index`` is taken; the start of the slot that took it [ticks]."""
+        engine, slot = self.engine, self.engine.slot_ticks
+        while engine.buffer.taken <= index:
+            # slots run so far: engine.slot_index; one entry per slot at most
+            t = engine.t0 + (engine.slot_index + index - engine.buffer.taken) * slot
+            yield self.sim.at(max(t, self.sim.now), Priority.HOST)
+        return engine.t0 + (engine.slot_index - 1 - (engine.buffer.taken - 1 - index)) * slot
+
+    def _apply(self, spindle: Spindle) -> None:
+        self.spindle_on.set(int(spindle.on))
+        self.spindle_ccw.set(int(spindle.ccw))
+        self.spindle_speed.set(float(spindle.speed))

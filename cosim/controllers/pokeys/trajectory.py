@@ -1,0 +1,122 @@
+"""The planner's one speed rule: a chain of straight segments into per-slot counts, in integers.
+
+A chain is a polyline in steps, travelled along one integer path coordinate ``s`` (the
+*odometer*): segment ``k`` covers ``length`` path quanta, and an axis inside it is at
+``start + trunc(delta * lam / length)`` after ``lam`` quanta of it (truncated towards the
+segment's start, as :func:`~cosim.controllers.pokeys.planner.plan_move` always did). Every
+segment ends on its end point in whole steps, so the counts of a chain add up to its end point
+exactly, whatever the speeds were: the fractional remainder is carried from slot to slot, never
+rounded away.
+
+Speeds are integers in quanta per slot, one per slot. Each slot takes the highest speed ``u``
+
+* within the current segment's limits: ``u <= vmax`` and ``v - decel <= u <= v + accel`` (``v``
+  the previous slot's speed);
+* from which the path can still slow to the corner speed ``W`` at the end of the segment:
+  decelerating ``decel`` per slot, the slots faster than ``W`` must end before the corner
+  (:func:`~cosim.controllers.pokeys.profile.fastest_arriving`). A slot that reaches or passes a
+  corner is therefore never faster than the corner allows. A corner with ``W = 0`` is an exact
+  stop: the path lands on it at the end of a slot and starts again from rest.
+
+The corner speeds are first lowered by a backward pass, so that from ``W`` at a corner the path
+can slow to the next corner's speed within the next segment; then looking one corner ahead is
+enough, and the slot rule never needs more deceleration than ``decel`` (each slot's choice leaves
+the next slot's ``u - decel`` feasible). With ``vmax`` below every axis' limit scaled by the
+segment's geometry (``vmax * |delta| / length <= limit``), no axis count of a slot exceeds its
+limit, also in a slot that passes a corner (its counts are the sum of two parts, each bounded by
+its share of the slot). The backward pass uses only integers too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from cosim.controllers.pokeys.profile import fastest_arriving
+from cosim.errors import ConfigurationError
+from cosim.validate import integer
+
+Counts = tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One straight piece of a chain.
+
+    Parameters
+    ----------
+    start, end : tuple of int
+        End points [steps], one per axis.
+    length : int
+        Path length [quanta], > 0.
+    vmax, accel, decel : int
+        Speed limit [quanta/slot] and acceleration, deceleration [quanta/slot^2], each >= 1.
+    corner : int
+        Highest speed at which the path may pass the segment's end [quanta/slot]; 0 = exact stop.
+        The last segment of a chain always ends at rest.
+    """
+
+    start: tuple[int, ...]
+    end: tuple[int, ...]
+    length: int
+    vmax: int
+    accel: int
+    decel: int
+    corner: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("length", "vmax", "accel", "decel"):
+            integer(getattr(self, name), f"segment {name}", low=1)
+        integer(self.corner, "segment corner", low=0)
+        if len(self.start) != len(self.end):
+            raise ConfigurationError.out_of_range("segment end axes", len(self.end), f"{len(self.start)} (as start)")
+
+
+def corner_speeds(segments: Sequence[Segment]) -> list[int]:
+    """The corner speeds the slot rule uses: each segment's ``corner`` lowered by the backward pass."""
+    n = len(segments)
+    speeds = [0] * n
+    for k in range(n - 2, -1, -1):
+        here, after = segments[k], segments[k + 1]
+        w_next = speeds[k + 1]
+        reach = fastest_arriving(after.length - (1 if w_next > 0 else 0), after.decel, w_next)
+        speeds[k] = min(here.corner, here.vmax, after.vmax, reach)
+    return speeds
+
+
+def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
+    """Per-slot signed counts of a chain, from rest at its first start point to rest at its last end point."""
+    if not segments:
+        return []
+    corners = corner_speeds(segments)
+    n = len(segments)
+    k, lam, v = 0, 0, 0
+    seg = segments[0]
+    pos = list(seg.start)
+    out: list[Counts] = []
+    axes = range(len(pos))
+    while not (k == n - 1 and lam == seg.length):
+        w = corners[k]
+        remaining = seg.length - lam - (1 if w > 0 else 0)
+        u = max(max(0, v - seg.decel), min(v + seg.accel, seg.vmax, fastest_arriving(remaining, seg.decel, w)))
+        if u <= 0:
+            raise RuntimeError(f"planner: no progress at segment {k} of {n} ({seg})")
+        lam += u
+        landed = False
+        while lam >= seg.length and k < n - 1:
+            if corners[k] == 0:
+                if lam != seg.length:
+                    raise RuntimeError(f"planner: passed the exact stop at the end of segment {k} ({seg})")
+                landed = True
+            lam -= seg.length
+            k += 1
+            seg = segments[k]
+        if lam > seg.length:
+            raise RuntimeError(f"planner: passed the end of the chain by {lam - seg.length} quanta")
+        start, end, length = seg.start, seg.end, seg.length
+        now = [start[a] + (end[a] - start[a]) * lam // length if end[a] >= start[a]
+               else start[a] - (start[a] - end[a]) * lam // length for a in axes]
+        out.append(tuple(now[a] - pos[a] for a in axes))
+        pos = now
+        v = 0 if landed else u
+    return out
