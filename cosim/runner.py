@@ -47,6 +47,8 @@ class Result:
     error_kind: str | None = None
     #: The plant that ended the run early: plant, fmu, t_ticks, t_s, reason, log (None if none did).
     terminated: dict[str, Any] | None = None
+    #: What the run told the user besides checks and figures (Run.note), in order.
+    notes: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
     simulated_s: float = 0.0
     out: Path | None = None
@@ -86,6 +88,7 @@ class Result:
             "figures": self.figures,
             "error": self.error,
             "terminated": self.terminated,
+            "notes": self.notes,
             "wall_time_s": round(self.wall_time_s, 4),
             "simulated_s": self.simulated_s,
             "real_time_factor": round(self.real_time_factor, 2),
@@ -104,6 +107,10 @@ class Result:
                              + (f" ({v['detail']})" if v.get("detail") else ""))
         for name, fig in self.figures.items():
             lines.append(f"  figure {name} = {fig['value']:.6g} {fig['unit']}".rstrip())
+        for note in self.notes[:10]:
+            lines.append(f"  note {note}")
+        if len(self.notes) > 10:
+            lines.append(f"  ... and {len(self.notes) - 10} more notes in result.json")
         if self.error:
             lines.append(f"  ERROR {self.error}")
         if self.terminated:
@@ -186,6 +193,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             sim.trace.end_t = sim.now if stop is None else stop
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
+        result.notes = list(run.notes)
         if result.error is None:
             _evaluate(run, result, scenario)
         if out is not None:

@@ -158,6 +158,7 @@ class Run:
     checks: list[CheckSpec] = field(default_factory=list)
     figures: dict[str, tuple[Callable[[], float] | float, str]] = field(default_factory=dict)
     plants: list[Plant] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     def plant(self, model: str | Path, *, name: str, fmi_version: int = 3, preset: str | None = None,
               parameters: Mapping[str, Value] | None = None) -> Plant:
@@ -177,6 +178,13 @@ class Run:
     def check(self, spec: CheckSpec) -> None:
         """Declare a check, evaluated on the trace after the run."""
         self.checks.append(spec)
+
+    def note(self, text: str) -> None:
+        """Tell the user something about the run that is neither a check nor a figure (in result.json and the table).
+
+        E.g. a G-code line the planner slowed down, or a skipped unsupported word.
+        """
+        self.notes.append(str(text))
 
     def figure(self, name: str, value: Callable[[], float] | float, unit: str = "") -> None:
         """Declare a key figure for the summary (a callable is evaluated after the run)."""

@@ -106,6 +106,8 @@ def test_a_feed_over_25_pulses_per_slot_is_slowed_and_the_result_says_so(job_mac
     assert meta["meta"]["gcode"]["notes"] == [f"{job_machine.parent / 'job.nc'}:2: feed 6000 mm/min needs 40000 "
                                               "pulses/s on x, more than the engine's 25 pulses per slot: slowed to "
                                               "3750 mm/min"]
+    assert result.notes == meta["meta"]["gcode"]["notes"]  # in result.json and the terminal table too
+    assert "note " + result.notes[0] in result.table()
 
 
 def test_unsupported_lines_can_be_skipped_and_are_listed(job_machine: Path, tmp_path: Path) -> None:
@@ -117,6 +119,7 @@ def test_unsupported_lines_can_be_skipped_and_are_listed(job_machine: Path, tmp_
     meta = json.loads((tmp_path / "o" / "trace_meta.json").read_text())
     assert meta["meta"]["gcode"]["skipped"] == [f"{job_machine.parent / 'job.nc'}:2: M8 is not supported "
                                                 "(supported: M3, M4, M5, M2, M30); line skipped"]
+    assert result.notes == ["skipped: " + meta["meta"]["gcode"]["skipped"][0]]
 
 
 @pytest.mark.parametrize(("program", "message"), [

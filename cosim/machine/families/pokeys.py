@@ -134,6 +134,8 @@ class PoKeysFamily:
             counts = job.counts
             run.sim.trace.meta["gcode"] = {"file": str(programs[0].data.get("file")), "notes": list(job.notes),
                                            "skipped": list(job.skipped), "end_steps": list(job.end_steps)}
+            for note in [*job.notes, *(f"skipped: {line}" for line in job.skipped)]:
+                run.note(note)
         else:
             for key in ("units", "feed_override", "path_mode", "path_tolerance", "arc_tolerance",
                         "allow_unsupported"):
