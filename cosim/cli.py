@@ -23,9 +23,10 @@ from typing import Any
 from cosim import __version__
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
 
-EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED = 0, 1, 2, 3
+EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
 EPILOG = ("Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error, "
-          "3 a plant FMU ended the run early (TERMINATED; the checks up to then passed).")
+          "3 a plant FMU ended the run early (TERMINATED; the checks up to then passed), 130 interrupted "
+          "(Ctrl-C or SIGTERM: what was simulated is written, verdict INTERRUPTED).")
 #: How many failing sweep runs are listed with their reason before the rest is only counted.
 SHOWN_FAILURES = 5
 
@@ -110,6 +111,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def _exit_status(result: Any) -> int:
+    if result.verdict == "INTERRUPTED":
+        return EXIT_INTERRUPTED
     if result.error_kind == "configuration":
         return EXIT_USAGE
     return {"PASS": EXIT_PASS, "TERMINATED": EXIT_TERMINATED}.get(result.verdict, EXIT_FAIL)

@@ -33,18 +33,25 @@ class _Environment(simpy.Environment):
         super().__init__(initial_time=0)
         self.look_aheads: list[LookAhead] = []
         self.on_progress: Callable[[int], None] | None = None
-        self._steps = 0
+        self._steps = 0  # kernel events run
+        self._work = 0  # kernel events and the passes fast paths run without one (for progress)
 
     def step(self) -> None:
         self._steps += 1
-        if self.on_progress is not None and not self._steps & 0xFFF:
-            self.on_progress(int(self._now))
+        self.count_step(self._now)
         if self.look_aheads:
             t_next = self.peek()
             if self._now < t_next < float("inf"):
                 for look_ahead in self.look_aheads:
                     look_ahead(int(t_next))
         super().step()
+
+
+    def count_step(self, now: float) -> None:
+        """Count one step of work (a kernel event, or a pass a fast path ran without one); report progress."""
+        self._work += 1
+        if self.on_progress is not None and not self._work & 0xFFF:
+            self.on_progress(int(now))
 
 
 class At(Event):
@@ -150,6 +157,7 @@ class Simulation:
         if env.look_aheads or t < env.now or self.due_by(t):
             return False
         env._now = t  # SimPy has no public setter; nothing is due before t, so no event is skipped
+        env.count_step(t)
         return True
 
     def process(self, generator: Generator[Event, Any, Any]) -> simpy.Process:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from cosim.catalog import examples, load
+from cosim.outdir import OutputFolder
 from cosim.runner import Result, run_scenario, to_json
 from cosim.scenario import bundled
 
@@ -30,29 +31,38 @@ def summary_table(results: list[Result]) -> str:
 
 
 def main_job(out: Path) -> int:
-    """Run every bundled scenario and example machine into ``out``; returns the exit status (1 if any failed)."""
+    """Run every bundled scenario and example machine into ``out``; returns the exit status.
+
+    0 when everything passed, 1 when anything did not, 130 when Ctrl-C (or SIGTERM) stopped the job:
+    the scenario that was running keeps what it simulated (INTERRUPTED), the rest are not run, and
+    the summary and report cover what ran. ``out`` is replaced as a whole when the job ends.
+    """
     from cosim import fmubuild
 
     for model in fmubuild.list_models():
         for version in (2, 3):
             fmubuild.ensure_fmu(model, version)
-    out.mkdir(parents=True, exist_ok=True)
+    staged = OutputFolder(out)
     results = []
     names: list[str | Path] = [*bundled(), *examples()]
     for name in names:
         scenario = load(name)
         print(f"running {scenario.name} ...", flush=True)
-        results.append(run_scenario(scenario, out=out / scenario.name, progress=True))
+        results.append(run_scenario(scenario, out=staged.staging / scenario.name, progress=True))
+        if results[-1].verdict == "INTERRUPTED":
+            print(f"interrupted: {len(names) - len(results)} scenario(s) not run", flush=True)
+            break
     print()
     print(summary_table(results))
-    (out / "summary.json").write_text(to_json([r.to_dict() for r in results]))
-    try:
-        from cosim.report import write_report
-    except ImportError:  # the HTML report arrives with the report module
-        pass
-    else:
-        print(f"report: {write_report(results, out)}")
+    (staged.staging / "summary.json").write_text(to_json([r.to_dict() for r in results]))
+    from cosim.report import write_report
+
+    write_report(results, staged.staging)
+    staged.commit()
+    print(f"report: {out / 'report.html'}")
     bad = [r.scenario for r in results if r.verdict != "PASS"]
-    tail = f"; failed: {', '.join(bad)}" if bad else ""
+    tail = f"; not passed: {', '.join(bad)}" if bad else ""
     print(f"\n{len(results) - len(bad)}/{len(results)} scenarios passed{tail}")
+    if results and results[-1].verdict == "INTERRUPTED":
+        return 130
     return 1 if bad else 0

@@ -269,6 +269,7 @@ class Plant:
                         t = t0 + k * period
                         if env.look_aheads or self._watched or sim.due_by(t):
                             break
+                        env.count_step(t)  # progress on long sampled runs, which run here without events
                         self._advance_to(t)
                 except PlantTerminated as ended:
                     if ended.t == t:

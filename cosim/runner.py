@@ -19,7 +19,11 @@ from __future__ import annotations
 
 import json
 import math
+import signal
+import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +31,7 @@ from typing import Any
 from cosim.errors import ConfigurationError, CosimError, PlantTerminated, ScenarioError
 from cosim.export import write_trace
 from cosim.kernel import Simulation
+from cosim.outdir import OutputFolder
 from cosim.scenario import Run, ScenarioFile, Values, where
 from cosim.timebase import TimeBase
 
@@ -47,6 +52,8 @@ class Result:
     error_kind: str | None = None
     #: The plant that ended the run early: plant, fmu, t_ticks, t_s, reason, log (None if none did).
     terminated: dict[str, Any] | None = None
+    #: Set when Ctrl-C or SIGTERM ended the run: signal, t_ticks, t_s (None otherwise).
+    interrupted: dict[str, Any] | None = None
     #: What the run told the user besides checks and figures (Run.note), in order.
     notes: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
@@ -63,8 +70,12 @@ class Result:
 
     @property
     def verdict(self) -> str:
-        """``PASS`` (every check passed), ``FAIL`` (a check failed), ``ERROR`` (the run broke) or
-        ``TERMINATED`` (a plant ended the run early and every check passed up to then)."""
+        """``PASS`` (every check passed), ``FAIL`` (a check failed), ``ERROR`` (the run broke, or a
+        check or figure could not be evaluated), ``TERMINATED`` (a plant ended the run early and every
+        check passed up to then) or ``INTERRUPTED`` (Ctrl-C or SIGTERM ended it; what it simulated is
+        written and checked)."""
+        if self.interrupted is not None:
+            return "INTERRUPTED"
         if self.error is not None:
             return "ERROR"
         if self.failed:
@@ -88,6 +99,7 @@ class Result:
             "figures": self.figures,
             "error": self.error,
             "terminated": self.terminated,
+            "interrupted": self.interrupted,
             "notes": self.notes,
             "wall_time_s": round(self.wall_time_s, 4),
             "simulated_s": self.simulated_s,
@@ -166,6 +178,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     values = scenario.resolve(overrides)
     with Simulation(seed=seed, timebase=TimeBase(scenario.resolution_for(values))) as sim:
         end = _end_time(sim, until if until is not None else scenario.until_for(values))
+        staged = OutputFolder(out) if out is not None else None  # refused or unwritable: before the run
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
         run = Run(sim=sim, p=Values(values), until=end)
@@ -173,9 +186,13 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         bar = _progress_bar(sim, end) if progress else None
         stop: int | None = None
         try:
-            scenario.function(run)
-            if sim.now < end:
-                sim.run(until=end)
+            with interrupts_raise():
+                scenario.function(run)
+                if sim.now < end:
+                    sim.run(until=end)
+        except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the run ends here, with what it simulated
+            result.interrupted = {"signal": str(exc) or "SIGINT", "t_ticks": sim.now,
+                                  "t_s": sim.timebase.seconds(sim.now)}
         except PlantTerminated as exc:  # not a failure: the run ends at the plant's tick
             stop = exc.t
             result.terminated = {"plant": exc.plant, "fmu": exc.fmu, "t_ticks": exc.t,
@@ -184,6 +201,9 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             result.error, result.error_kind = where(exc, scenario.path) + str(exc), "configuration"
         except CosimError as exc:
             result.error, result.error_kind = where(exc, scenario.path) + str(exc), "run"
+        except SystemExit as exc:  # a script that calls sys.exit() ends its run, not cosim
+            result.error = where(exc, scenario.path) + f"the scenario called sys.exit({exc.code!r})"
+            result.error_kind = "script"
         except Exception as exc:  # a bug in a user's script: say where, keep the trace
             result.error = where(exc, scenario.path) + f"{type(exc).__name__}: {exc}"
             result.error_kind = "script"
@@ -196,24 +216,57 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         result.notes = list(run.notes)
         if result.error is None:
             _evaluate(run, result, scenario)
-        if out is not None:
-            folder = Path(out)
-            write_trace(sim.trace, folder, formats=formats)
-            (folder / "result.json").write_text(to_json(result.to_dict()))
-            result.out = folder
+        if staged is not None:
+            write_trace(sim.trace, staged.staging, formats=formats)
+            (staged.staging / "result.json").write_text(to_json(result.to_dict()))
+            result.out = staged.commit()
     return result
 
 
-def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
+@contextmanager
+def interrupts_raise() -> Iterator[None]:
+    """While inside, SIGTERM interrupts like Ctrl-C (KeyboardInterrupt naming the signal); main thread only."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def on_term(signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt("SIGTERM")
+
+    previous = signal.signal(signal.SIGTERM, on_term)
     try:
-        for spec in run.checks:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
+    """Every check and figure on its own: one that raises is an error entry, the others still count."""
+    for spec, declared in zip(run.checks, run.declared, strict=True):
+        try:
             result.checks.append(spec.evaluate(run.sim.trace).to_dict())
-        for name, (value, unit) in run.figures.items():
+        except Exception as exc:
+            text = f"{declared}check {_label(spec)}: {exc.args[0] if isinstance(exc, KeyError) else exc}"
+            result.checks.append({"name": _label(spec), "passed": False, "checked": 0, "n_violations": 0,
+                                  "violations": [], "measured": {}, "error": text})
+            _first_error(result, text, "configuration" if isinstance(exc, KeyError | ConfigurationError) else "run")
+    for name, (value, unit) in run.figures.items():
+        try:
             number = value() if callable(value) else value
             result.figures[name] = {"value": float(number), "unit": unit}
-    except (KeyError, CosimError) as exc:
-        result.error = where(exc, scenario.path) + f"while evaluating checks: {exc}"
-        result.error_kind = "configuration" if isinstance(exc, KeyError | ConfigurationError) else "run"
+        except Exception as exc:
+            text = where(exc, scenario.path) + f"figure {name}: {type(exc).__name__}: {exc}"
+            result.figures[name] = {"value": None, "unit": unit, "error": text}
+            _first_error(result, text, "script")
+
+
+def _label(spec: object) -> str:
+    return str(getattr(spec, "label", None) or getattr(spec, "name", None) or type(spec).__name__)
+
+
+def _first_error(result: Result, text: str, kind: str) -> None:
+    if result.error is None:
+        result.error, result.error_kind = text, kind
 
 
 def _end_time(sim: Simulation, until: str | int) -> int:

@@ -156,6 +156,8 @@ class Run:
     p: Values
     until: int
     checks: list[CheckSpec] = field(default_factory=list)
+    #: Where each check was declared (``file:line: `` of the caller), for messages after the run.
+    declared: list[str] = field(default_factory=list)
     figures: dict[str, tuple[Callable[[], float] | float, str]] = field(default_factory=dict)
     plants: list[Plant] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -175,9 +177,17 @@ class Run:
         self.plants.append(plant)
         return plant
 
-    def check(self, spec: CheckSpec) -> None:
-        """Declare a check, evaluated on the trace after the run."""
+    def check(self, spec: CheckSpec, *, where: str | None = None) -> None:
+        """Declare a check, evaluated on the trace after the run.
+
+        ``where`` says where it was declared, for messages after the run (default: the calling
+        line of the script, ``file:line``).
+        """
+        if where is None:
+            caller = sys._getframe(1)
+            where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
         self.checks.append(spec)
+        self.declared.append(f"{where}: ")
 
     def note(self, text: str) -> None:
         """Tell the user something about the run that is neither a check nor a figure (in result.json and the table).

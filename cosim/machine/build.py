@@ -46,7 +46,7 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
     for table in document.tables("stimulus"):
         _stimulus(run, controller, table)
     for table in document.tables("check"):
-        run.check(check_from_table(table))
+        run.check(check_from_table(table), where=f"{table.file}: {table.path}")
     trace = run.sim.trace
     for table in document.tables("figure"):
         name, value, unit = figure_from_table(table, plants)
