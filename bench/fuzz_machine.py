@@ -18,11 +18,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
-from test_machine_fuzz import KEYS, SEED, load_machine_from  # noqa: E402
+from test_machine_fuzz import KEYS, SEED, load_machine_from
 
-from cosim.errors import CosimError  # noqa: E402
-from cosim.machine import load_machine  # noqa: E402
-from cosim.machine.check import check_machine  # noqa: E402
+from cosim.errors import CosimError
+from cosim.machine import load_machine
+from cosim.machine.check import check_machine
 
 VALUES = [0, 1, -1, 2**31, 2**64, 1e300, float("nan"), float("inf"), "", "1 ms", "-1 s", "1e9 s", "abc", "pokeys",
           "trio", "usb", "x", "max", True, False, [1, 2], [], {"a": 1}, 25, 0.5, "0 s", "nan", "\x00"]

@@ -5,6 +5,7 @@ A longer run of the same properties (bench/fuzz_machine.py) covers about a milli
 
 from __future__ import annotations
 
+import contextlib
 import tomllib
 from pathlib import Path
 
@@ -55,10 +56,8 @@ VALUES = st.one_of(st.integers(-(2**70), 2**70), st.floats(allow_nan=True, allow
 
 
 def _try(path: Path) -> None:
-    try:
+    with contextlib.suppress(CosimError):
         check_machine(load_machine(path))
-    except CosimError:
-        pass
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -104,7 +103,9 @@ def load_machine_from(document: dict[str, object], folder: Path) -> Path | None:
         if isinstance(value, bool):
             return "true" if value else "false"
         if isinstance(value, float):
-            return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf") if math.isinf(value) else repr(value)
+            if math.isnan(value):
+                return "nan"
+            return ("inf" if value > 0 else "-inf") if math.isinf(value) else repr(value)
         if isinstance(value, str):
             return '"' + value.replace("\\", "\\\\").replace('"', '\\"').encode("unicode_escape").decode() + '"'
         if isinstance(value, list):
