@@ -37,13 +37,15 @@ def test_parse_hex_decimal_address_of_and_comments() -> None:
 def test_cs_numbering_pmac_and_turbo() -> None:
     assert cs_ivar(193) == (1, 93) and cs_ivar(894) == (8, 94)
     assert cs_ivar(5193) == (1, 93) and cs_ivar(5894) == (8, 94)
-    assert cs_ivar(93) is None and cs_ivar(995) is None and cs_ivar(195) is None
+    assert cs_ivar(93) is None and cs_ivar(995) is None and cs_ivar(196) is None and cs_ivar(192) is None
+    assert cs_ivar(195) == (1, 95) and cs_ivar(5887) == (8, 87)
 
 
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("I10=3713707\nI130=2000", r"cell.pmc line 2: I130 is not an I-variable this model knows \(known: I10; Ix93"),
+        ("I10=3713707\nI130=2000",
+         r"cell.pmc line 2: I130 is not an I-variable this model knows \(known: I10; Ix87..Ix89 and Ix93..Ix95"),
         ("I7000=1", r"cell.pmc line 1: I7000 is not an I-variable"),
         ("I194=8388608", r"cell.pmc line 1: I194 \(Ix94, time-base slew limit\) = 8388608 is not allowed "
                          r"\(allowed: integers 0..8388607"),
