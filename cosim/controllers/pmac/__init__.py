@@ -27,11 +27,11 @@ from cosim.controllers.pmac.ect import (
     pmac_default_table,
 )
 from cosim.controllers.pmac.encoder import EncoderChannel
-from cosim.controllers.pmac.ivars import parse_setup
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove
 from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.servo import MotorModel, PidDesign, PidLoop, design_pid
+from cosim.controllers.pmac.setupfile import parse_setup
 from cosim.controllers.pmac.units import (
     I10_DEFAULT,
     IX94_DEFAULT,

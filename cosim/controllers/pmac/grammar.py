@@ -15,7 +15,7 @@ _online: cs_select | motor_def | motor_select | open_buffer | clear | close | be
 
 cs_select: "&" INT
 motor_select: "#" INT
-motor_def: "#" INT "->" [SIGN] [_decimal] AXIS
+motor_def: "#" INT "->" [SIGN] [SCALE] AXIS
 _decimal: INT | NUMBER
 open_buffer: _OPEN BUFFER INT
 clear: _CLEAR
@@ -117,6 +117,7 @@ ADDOP: "+" | "-" | "|" | "^"
 MULOP: "*" | "/" | "%" | "&"
 INT: /[0-9]+/
 NUMBER: /[0-9]+\.[0-9]*|\.[0-9]+/
+SCALE: /[0-9]+(\.[0-9]*)?|\.[0-9]+/
 HEX: /\$[0-9A-F]+/i
 ADDRESS_OF: /@I[0-9]+/i
 STRING: /"[^"]*"/

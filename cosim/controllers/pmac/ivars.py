@@ -1,13 +1,9 @@
-"""I-variable setup text: the assignments users keep in their PMAC setup files.
+"""The I-variables the model knows: their numbers, ranges and meaning.
 
-Accepted syntax, one or more assignments per line, case-insensitive::
-
-    I10=3713707            ; decimal
-    I8010=$978008 I8011=64 ; hex with $, several on a line
-    I5193=@I8011           ; @In = address of a conversion-table line (I8000..I8191)
-
-``;`` starts a comment. Every variable must be one the model knows; anything else is an error
-naming the file and line (silently ignoring a setting would give a different machine).
+Setup text (``I10=3713707``, ``I8010=$978008 I8011=64``, ``I5193=@I8011``) is read by
+:func:`cosim.controllers.pmac.setupfile.parse_setup` with the one PMAC grammar. Every variable
+must be one the model knows; anything else is an error naming the file, line and column
+(silently ignoring a setting would give a different machine).
 
 Known variables and their ranges:
 
@@ -34,13 +30,10 @@ systems 1..8; motor variables Ixx20..Ixx22 address motors 1..32 (I120..I3222).
 
 from __future__ import annotations
 
-import re
-from dataclasses import dataclass
-from decimal import Decimal, InvalidOperation
 from fractions import Fraction
 
 from cosim import validate
-from cosim.controllers.pmac.ect import TURBO_ECT_BASE, TURBO_ECT_LINES
+from cosim.controllers.pmac.ect import TURBO_ECT_LINES
 from cosim.controllers.pmac.units import I10_ALLOWED, IX94_ALLOWED, IX94_MAX, REG_MASK, REG_MAX, WORD_ALLOWED
 from cosim.errors import ConfigurationError
 
@@ -52,37 +45,9 @@ CS_SUFFIXES = (87, 88, 89, 93, 94, 95)
 MOTOR_SUFFIXES = (20, 21, 22)
 MOTOR_DEFAULTS = {20: 0, 21: 50, 22: 32}
 MOTORS = 32
-_ASSIGNMENT = re.compile(r"I(\d+)\s*=\s*(\S+)", re.IGNORECASE)
 _KNOWN = ("I10; Ix87..Ix89 and Ix93..Ix95 for coordinate system x = 1..8 (I187..I895, Turbo I5187..I5895); "
           f"Ixx20..Ixx22 for motor xx = 1..{MOTORS}; I{ECT_FIRST}..I{ECT_LAST} (conversion table)")
 _MS_ALLOWED = f"integers 0..{REG_MAX} (ms)"
-
-
-@dataclass(frozen=True)
-class Assignment:
-    """One ``In=value`` of a setup file.
-
-    Attributes
-    ----------
-    number : int
-        I-variable number n.
-    value : int or Fraction
-        Parsed value (a Fraction only for Ix89 and Ixx22).
-    line : int
-        Line number (1-based).
-    source : str
-        File name (or a label) for messages.
-    """
-
-    number: int
-    value: int | Fraction
-    line: int
-    source: str
-
-    @property
-    def where(self) -> str:
-        """``file line N`` for error messages."""
-        return f"{self.source} line {self.line}"
 
 
 def cs_ivar(number: int) -> tuple[int, int] | None:
@@ -163,62 +128,3 @@ def _positive(value: object, name: str, unit: str, where: str) -> Fraction:
     if exact > REG_MAX:
         raise ConfigurationError.out_of_range(name, value, f"> 0 and <= {REG_MAX} ({unit})", where=where)
     return exact
-
-
-def _parse_value(text: str, name: str, where: str) -> int | Fraction:
-    if text.startswith("$"):
-        try:
-            return int(text[1:], 16)
-        except ValueError:
-            pass
-    elif text[:2].upper() == "@I" and text[2:].isdigit():
-        target = int(text[2:])
-        if ECT_FIRST <= target <= ECT_LAST:
-            return TURBO_ECT_BASE + target - ECT_FIRST
-        raise ConfigurationError.out_of_range(f"{name} (address of {text[1:]})", text,
-                                              f"@I{ECT_FIRST}..@I{ECT_LAST}", where=where)
-    else:
-        try:
-            Decimal(text)
-        except InvalidOperation:
-            pass
-        else:  # a number, finite and of sane size (else refused here), checked against the range by check_ivar
-            number = validate.exact(text, name, where=where)
-            return number.numerator if number.denominator == 1 else number
-    raise ConfigurationError(f"{where}: {name} = {text!r} is not a number (write decimal, $hex or @In)")
-
-
-def parse_setup(text: str, *, source: str = "setup") -> tuple[Assignment, ...]:
-    """Parse setup text into assignments (in file order), checking every name and range.
-
-    Parameters
-    ----------
-    text : str
-        The setup file's content.
-    source : str
-        File name for messages.
-
-    Raises
-    ------
-    ConfigurationError
-        ``<source> line <n>: ...`` for unknown variables, bad syntax or values out of range.
-    """
-    assignments: list[Assignment] = []
-    for line_no, raw in enumerate(text.splitlines(), 1):
-        code = raw.split(";", 1)[0].strip()
-        if not code:
-            continue
-        where = f"{source} line {line_no}"
-        rest = _ASSIGNMENT.sub("", code).strip()
-        if rest:
-            raise ConfigurationError(
-                f"{where}: {rest.split()[0]!r} is not an I-variable assignment "
-                "(this loader reads assignments like I10=3713707 or I8010=$978008)")
-        for match in _ASSIGNMENT.finditer(code):
-            number = int(match.group(1))
-            name = f"I{number}"
-            if not is_known(number):
-                check_ivar(number, 0, where=where)  # raises: unknown variable
-            value = _parse_value(match.group(2), name, where)
-            assignments.append(Assignment(number, check_ivar(number, value, where=where), line_no, source))
-    return tuple(assignments)

@@ -39,6 +39,7 @@ from cosim.controllers.pmac.encoder import CAPTURE_OFFSET, EncoderChannel, Encod
 from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.runtime import Programs
 from cosim.controllers.pmac.servo import PidLoop
+from cosim.controllers.pmac.setupfile import parse_setup
 from cosim.controllers.pmac.units import I10_DEFAULT, REG_MASK, Reg, ServoClock, hexaddr
 from cosim.errors import ConfigurationError
 from cosim.signals import PulseTrain, Signal
@@ -285,7 +286,7 @@ class Pmac:
         """Apply a setup file: its I8000..I8191 lines build the table, then the rest in file order."""
         if self._started:
             raise ConfigurationError("load the setup before start()")
-        assignments = ivars.parse_setup(text, source=source)
+        assignments = parse_setup(text, source=source)
         lines = {a.number - ivars.ECT_FIRST: int(a.value) for a in assignments if a.number >= ivars.ECT_FIRST}
         if lines:
             if self.table.entries:

@@ -20,6 +20,7 @@ from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
 from cosim.controllers.pmac import arith, ivars
+from cosim.controllers.pmac.ect import TURBO_ECT_BASE
 from cosim.controllers.pmac.grammar import GRAMMAR
 from cosim.controllers.pmac.units import REG_MASK
 from cosim.errors import ConfigurationError
@@ -136,6 +137,26 @@ class Logic:
 
 
 Cond = Compare | Logic
+
+
+def constant(expr: Expr) -> Fraction | None:
+    """The value of an expression without variables (None if it reads one)."""
+    if isinstance(expr, Num):
+        return expr.value
+    if isinstance(expr, Var):
+        return None
+    if isinstance(expr, Neg | Func):
+        arg = constant(expr.arg)
+        if arg is None:
+            return None
+        return -arg if isinstance(expr, Neg) else arith.function(expr.name, arg)
+    value = constant(expr.first)
+    for op, operand in expr.rest:
+        right = constant(operand)
+        if value is None or right is None:
+            return None
+        value = arith.binary(op, value, right, where=str(expr.pos))
+    return value
 
 
 # -- statements --------------------------------------------------------------------------------
@@ -416,6 +437,10 @@ def _syntax_error(exc: UnexpectedInput, text: str, *, context: str, pos: Pos) ->
             return where.error(f"{shown!r} is a program statement: write it between OPEN PROG n (or OPEN PLC n) "
                                "and CLOSE")
         return where.error(f"{shown!r} is an online command, not allowed inside a program buffer (CLOSE it first)")
+    before = text[:col - 1].rstrip()
+    if before.endswith("="):
+        return where.error(f"{shown!r} is not a value (write a number: decimal, $hex or @In; a variable; or an "
+                           "expression of them)")
     if word[:1] in "eE" and col > 1 and text[col - 2].isdigit():
         return where.error(f"syntax error: unexpected {shown!r} (PMAC numbers are written without an exponent)")
     if isinstance(exc, UnexpectedCharacters) and word[:1].isalpha():
@@ -516,8 +541,8 @@ class _Converter:
     def assign(self, pos: Pos, kids: list) -> Assign:
         var = self.var(kids[0])
         expr = self.expr(kids[1])
-        if var.kind == "I" and isinstance(expr, Num):
-            value = expr.value
+        value = constant(expr) if var.kind == "I" else None
+        if value is not None:
             ivars.check_ivar(var.number, value.numerator if value.denominator == 1 else value, where=str(pos))
         return Assign(pos, var, expr)
 
@@ -576,7 +601,7 @@ class _Converter:
             if not ivars.ECT_FIRST <= target <= ivars.ECT_LAST:
                 raise pos.error(f"{text} = address of I{target} is not allowed "
                                 f"(allowed: @I{ivars.ECT_FIRST}..@I{ivars.ECT_LAST}, conversion-table lines)")
-            return Num(Fraction(ivars.TURBO_ECT_BASE + target - ivars.ECT_FIRST))
+            return Num(Fraction(TURBO_ECT_BASE + target - ivars.ECT_FIRST))
         if kind == "var":
             return self.var(node)
         if kind == "neg":
