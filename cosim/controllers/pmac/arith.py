@@ -7,9 +7,9 @@ that no expression, loop or literal can grow a number without limit:
 * **Magnitude**: ``|value| < 2^47`` (a signed 48-bit double word). A literal, an intermediate
   result or a stored value outside is an error naming the value and the range (the program stops).
 * **Resolution**: a value whose denominator exceeds ``2^48`` is replaced by the nearest fraction
-  whose denominator does not (:meth:`~fractions.Fraction.limit_denominator`): ``P1=1/3`` stays
-  exact, ``P1=P1/3`` repeated 40 times keeps a value within ``2^-96`` of the exact one, and the
-  numerator and denominator of every stored value stay below ``2^96`` and ``2^48``.
+  whose denominator does not (:meth:`~fractions.Fraction.limit_denominator`, within ``2^-49``):
+  ``P1=1/3`` stays exact, ``P1=P1/3`` is exact 30 times (``3^30 < 2^48``) and then rounded, and
+  the numerator and denominator of every stored value stay below ``2^95`` and ``2^48``.
 * **Literals**: decimal (``64000``, ``0.25``, ``.5``), hex (``$9F8018``); at most 15 integer
   digits and 30 fraction digits (more cannot be held), no exponent notation (PMAC has none).
 

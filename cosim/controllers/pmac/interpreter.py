@@ -221,9 +221,12 @@ class MotionProgram:
         self.modes = modes
         self.finished = False
         self._dwell: int | None = None
+        self._yielded_at: int | None = None
 
     def calculate(self, cs: CoordinateSystem, t: int) -> None:
         """Run statements until LOOKAHEAD moves are queued, a DWELL waits, a loop yields, or the end."""
+        if self._yielded_at == t:  # a loop without moves made its pass of this servo cycle
+            return
         ctx = self.context
         queued = False
         for _step in range(MAX_STEPS):
@@ -243,6 +246,7 @@ class MotionProgram:
             back = ctx.flow(instr, self.programs)
             if back:
                 if not queued:
+                    self._yielded_at = t
                     return
             elif back is None:
                 assert isinstance(instr, Stmt)

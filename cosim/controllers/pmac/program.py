@@ -221,7 +221,8 @@ def parse_text(text: str, *, source: str = "program.pmc") -> PmacText:
                     clear = bool(rest) and isinstance(rest[0], Clear)
                     if rest[clear:]:
                         raise rest[clear].pos.error(f"nothing may follow OPEN {stmt.kind} {stmt.number}"
-                                                    f"{' CLEAR' if clear else ''} on its line")
+                                                    f"{' CLEAR' if clear else ''} on its line: the buffer's "
+                                                    "statements go on the lines after it")
                     current = (stmt, clear, [])
                     break
                 if isinstance(stmt, Clear):

@@ -317,6 +317,8 @@ class Programs:
                     self.program(stmt.program, stmt.pos)
                 elif isinstance(stmt, Cmd):
                     self._check_statements(stmt.commands, Session())
+                elif isinstance(stmt, Enable | Disable):
+                    self._check_statements((stmt,), Session())
             for var in code.variables():
                 self._check_var(var)
         for cs_number, number, _pos in self._uses:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from lark.exceptions import UnexpectedInput, UnexpectedToken
 
 from cosim.controllers.pmac import arith, ivars
 from cosim.controllers.pmac.ect import TURBO_ECT_BASE
@@ -420,16 +420,23 @@ def parse_line(text: str, *, context: str, source: str, line: int, column: int =
 
 
 def _syntax_error(exc: UnexpectedInput, text: str, *, context: str, pos: Pos) -> ConfigurationError:
-    col = exc.column if isinstance(exc.column, int) and exc.column > 0 else len(text) + 1
-    where = pos.shifted(col - 1)
     if isinstance(exc, UnexpectedToken) and exc.token.type == "$END":
-        return where.error("the statement is incomplete at the end of the line")
-    match = _WORD.match(text, col - 1)
-    word = match.group(0) if match else text[col - 1:col]
+        return pos.shifted(len(text.rstrip())).error("the statement is incomplete at the end of the line")
+    col = exc.column if isinstance(exc.column, int) and exc.column > 0 else len(text) + 1
+    start = col - 1
+    if start < len(text) and text[start].isalpha():
+        while start > 0 and text[start - 1].isalpha():  # the whole word (F of FEED lexes as the F command)
+            start -= 1
+    where = pos.shifted(start)
+    match = _WORD.match(text, start)
+    word = match.group(0) if match else text[start:start + 1]
     shown = word if len(word) <= 30 else word[:27] + "..."
+    if context == "online" and re.match(r"\s*OPEN\b", text, re.IGNORECASE):
+        return where.error("nothing may follow OPEN PROG n [CLEAR] (or OPEN PLC n [CLEAR]) on its line: the buffer's "
+                           "statements go on the lines after it")
     other = "program" if context == "online" else "online"
     try:
-        _PARSER.parse(text[col - 1:], start=f"{other}_line")
+        _PARSER.parse(text[start:], start=f"{other}_line")
     except UnexpectedInput:
         pass
     else:
@@ -437,13 +444,13 @@ def _syntax_error(exc: UnexpectedInput, text: str, *, context: str, pos: Pos) ->
             return where.error(f"{shown!r} is a program statement: write it between OPEN PROG n (or OPEN PLC n) "
                                "and CLOSE")
         return where.error(f"{shown!r} is an online command, not allowed inside a program buffer (CLOSE it first)")
-    before = text[:col - 1].rstrip()
+    before = text[:start].rstrip()
     if before.endswith("="):
         return where.error(f"{shown!r} is not a value (write a number: decimal, $hex or @In; a variable; or an "
                            "expression of them)")
-    if word[:1] in "eE" and col > 1 and text[col - 2].isdigit():
+    if word[:1] in "eE" and start > 0 and text[start - 1].isdigit():
         return where.error(f"syntax error: unexpected {shown!r} (PMAC numbers are written without an exponent)")
-    if isinstance(exc, UnexpectedCharacters) and word[:1].isalpha():
+    if word[:1].isalpha():
         return where.error(f"unknown command {shown!r}")
     return where.error(f"syntax error: unexpected {shown!r}")
 
