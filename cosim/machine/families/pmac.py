@@ -157,4 +157,5 @@ def _figures(run: Run, pmac: Pmac) -> None:
             run.figure(f"motor{number}_phase_margin", loop.design.phase_margin_deg, "deg")
             run.figure(f"motor{number}_bandwidth", loop.design.bandwidth_hz, "Hz")
         run.figure(f"motor{number}_final_cmd", lambda motor=motor: float(motor.cmd), "counts")  # type: ignore[misc]
-    run.figure("plc_scans", lambda: float(pmac.programs.scans))
+    if any(number != 0 for number in pmac.programs.plcs):
+        run.figure("plc_scans", lambda: float(pmac.programs.scans))
