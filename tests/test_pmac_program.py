@@ -9,8 +9,18 @@ import pytest
 
 from cosim.cli import main
 from cosim.controllers.pmac import Pmac
+from cosim.controllers.pmac.nodes import (
+    Assign,
+    If,
+    MDefine,
+    MotorDef,
+    Num,
+)
 from cosim.controllers.pmac.program import MAX_BLOCKS, Jump, JumpUnless, MoveStmt, Sub, parse_text
-from cosim.controllers.pmac.statements import MAX_PARENS, Assign, If, MDefine, MotorDef, Num, parse_line
+from cosim.controllers.pmac.statements import (
+    MAX_PARENS,
+    parse_line,
+)
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
@@ -236,6 +246,6 @@ def test_bad_programs_exit_2_through_cosim_run_with_nothing_run(tmp_path: Path, 
 
 def test_constant_expressions_are_exact() -> None:
     (stmt,) = parse_line("P1=(1/3+1/6)*$10-INT(-2.5)+ABS(-0.25)", context="online", source="s", line=1)
-    from cosim.controllers.pmac.statements import constant
+    from cosim.controllers.pmac.nodes import constant
 
     assert isinstance(stmt, Assign) and constant(stmt.expr) == Fraction(8) + 3 + Fraction(1, 4)

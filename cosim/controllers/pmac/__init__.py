@@ -9,7 +9,7 @@ Modules: :mod:`.units` (I10, servo clock, 2^-23 ms units), :mod:`.encoder` (1/T 
 capture), :mod:`.ect` (conversion table), :mod:`.motion` and :mod:`.profile` (moves), :mod:`.coord`
 (coordinate system, Ix93/Ix94, slip), :mod:`.servo` (PID design and loop), :mod:`.motor`,
 :mod:`.ivars` (the I-variables), :mod:`.machine` (the controller). Programs as text:
-:mod:`.grammar`, :mod:`.statements`, :mod:`.program`, :mod:`.setupfile` (reading),
+:mod:`.grammar`, :mod:`.statements`, :mod:`.nodes`, :mod:`.program`, :mod:`.setupfile` (reading),
 :mod:`.arith`, :mod:`.mvars`, :mod:`.interpreter`, :mod:`.runtime` (running). Encoders and their
 1/T extension are shared with the plants in :mod:`cosim.encoders`; ready-made machines are in
 :mod:`cosim.rigs`.

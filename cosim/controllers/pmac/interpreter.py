@@ -37,8 +37,7 @@ from typing import TYPE_CHECKING
 
 from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.motion import Delay, Dwell, Item, Move, RapidAxis, RapidMove
-from cosim.controllers.pmac.program import Code, Instr, Jump, JumpUnless, MoveStmt, Sub
-from cosim.controllers.pmac.statements import (
+from cosim.controllers.pmac.nodes import (
     Assign,
     Call,
     Cmd,
@@ -59,12 +58,9 @@ from cosim.controllers.pmac.statements import (
     Var,
     located,
 )
-from cosim.controllers.pmac.statements import (
-    Delay as DelayStmt,
-)
-from cosim.controllers.pmac.statements import (
-    Dwell as DwellStmt,
-)
+from cosim.controllers.pmac.nodes import Delay as DelayStmt
+from cosim.controllers.pmac.nodes import Dwell as DwellStmt
+from cosim.controllers.pmac.program import Code, Instr, Jump, JumpUnless, MoveStmt, Sub
 
 if TYPE_CHECKING:
     from cosim.controllers.pmac.coord import CoordinateSystem

@@ -33,7 +33,12 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.controllers.pmac import arith
-from cosim.controllers.pmac.statements import MDefine, Pos, Var, located
+from cosim.controllers.pmac.nodes import (
+    MDefine,
+    Pos,
+    Var,
+    located,
+)
 
 if TYPE_CHECKING:
     from cosim.controllers.pmac.machine import Pmac

@@ -32,7 +32,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from cosim.controllers.pmac.statements import (
+from cosim.controllers.pmac.nodes import (
     MOTION_ONLY,
     AxisWord,
     Call,
@@ -58,6 +58,8 @@ from cosim.controllers.pmac.statements import (
     Stmt,
     Var,
     While,
+)
+from cosim.controllers.pmac.statements import (
     parse_line,
 )
 

@@ -39,16 +39,7 @@ from typing import TYPE_CHECKING, Any
 from cosim import validate
 from cosim.controllers.pmac.interpreter import MotionModes, MotionProgram, PlcProgram, evaluate
 from cosim.controllers.pmac.mvars import Memory
-from cosim.controllers.pmac.program import (
-    Buffer,
-    Code,
-    MoveStmt,
-    compile_buffer,
-    expr_variables,
-    parse_text,
-    stmt_variables,
-)
-from cosim.controllers.pmac.statements import (
+from cosim.controllers.pmac.nodes import (
     Assign,
     Begin,
     Call,
@@ -70,6 +61,17 @@ from cosim.controllers.pmac.statements import (
     Stmt,
     Var,
     located,
+)
+from cosim.controllers.pmac.program import (
+    Buffer,
+    Code,
+    MoveStmt,
+    compile_buffer,
+    expr_variables,
+    parse_text,
+    stmt_variables,
+)
+from cosim.controllers.pmac.statements import (
     parse_line,
 )
 from cosim.timebase import Priority

@@ -19,8 +19,11 @@ from dataclasses import dataclass
 from fractions import Fraction
 
 from cosim.controllers.pmac.ivars import check_ivar
+from cosim.controllers.pmac.nodes import (
+    Assign,
+    constant,
+)
 from cosim.controllers.pmac.program import Buffer, parse_text
-from cosim.controllers.pmac.statements import Assign, constant
 
 
 @dataclass(frozen=True)
