@@ -302,7 +302,9 @@ class Pmac:
         Raises
         ------
         ConfigurationError
-            ``source:line:column: ...``; nothing of the file is applied then.
+            ``source:line:column: ...``. The whole file is parsed and checked first, so a syntax or
+            range error applies nothing; an error that only applying shows (an Ix93 naming no
+            time-base register) stops the load there.
         """
         if self._started:
             raise ConfigurationError(f"{source}: load PMAC files before start()")

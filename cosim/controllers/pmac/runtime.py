@@ -60,6 +60,7 @@ from cosim.controllers.pmac.nodes import (
     Run,
     Stmt,
     Var,
+    constant,
     located,
 )
 from cosim.controllers.pmac.program import (
@@ -67,7 +68,6 @@ from cosim.controllers.pmac.program import (
     Code,
     MoveStmt,
     compile_buffer,
-    expr_variables,
     parse_text,
     stmt_variables,
 )
@@ -153,11 +153,11 @@ class Programs:
         used: set[int] = set()
         if not self.pmac.table.entries:
             for index, item in enumerate(parsed.items):
-                if (isinstance(item, Assign) and item.var.kind == "I" and item.var.number >= 8000
-                        and not any(True for _ in expr_variables(item.expr))):
-                    line = item.var.number - 8000
-                    table_lines[line] = int(evaluate(item.expr, self))
-                    where[line] = str(item.pos)
+                is_line = isinstance(item, Assign) and item.var.kind == "I" and item.var.number >= 8000
+                value = constant(item.expr) if isinstance(item, Assign) and is_line else None
+                if isinstance(item, Assign) and value is not None:  # an integer: checked when parsed
+                    table_lines[item.var.number - 8000] = int(value)
+                    where[item.var.number - 8000] = str(item.pos)
                     used.add(index)
         if table_lines:
             self.pmac.build_table(table_lines, where=where)
