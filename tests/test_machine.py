@@ -100,7 +100,7 @@ def test_check_machine_builds_without_running(trio_machine: Path) -> None:
     (lambda t: t.replace('preset = "laser_co2_40w"', 'preset = "laser_co2_40w"\npresett = 1'),
      r"engraver.toml: plant.laser.presett is not a key of plant.laser; did you mean preset\?"),
     (lambda t: t.replace('family = "trio"', 'family = "trrio"'),
-     r"engraver.toml: controller.family: value = 'trrio' is not allowed \(allowed: pokeys, trio\)"),
+     r"engraver.toml: controller.family: value = 'trrio' is not allowed \(allowed: pmac, pokeys, trio\)"),
     (lambda t: t.replace('model = "Laser"', 'fmu = "missing.fmu"'),
      r"engraver.toml: plant.laser.fmu: FMU file .*missing.fmu does not exist"),
     (lambda t: t.replace("laser = { axis = 3 }", 'laser = { axis = 3, variables = { mark_clocks = "pwm_onn" } }'),

@@ -7,8 +7,9 @@ from fractions import Fraction
 import pytest
 
 from cosim.controllers.pmac.ect import RUNNING, TriggeredTimeBaseEntry
-from cosim.controllers.pmac.ivars import Assignment, cs_ivar, parse_setup
+from cosim.controllers.pmac.ivars import cs_ivar
 from cosim.controllers.pmac.machine import Pmac
+from cosim.controllers.pmac.setupfile import Assignment, parse_setup
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
@@ -25,50 +26,63 @@ I5194=8388607
 def test_parse_hex_decimal_address_of_and_comments() -> None:
     assignments = parse_setup(MANUAL_EXAMPLE, source="cell.pmc")
     assert assignments == (
-        Assignment(10, 3_713_707, 2, "cell.pmc"),
-        Assignment(8008, 0xAF8018, 3, "cell.pmc"),
-        Assignment(8009, 64, 3, "cell.pmc"),
-        Assignment(5193, 0x350A, 4, "cell.pmc"),
-        Assignment(5194, 8_388_607, 5, "cell.pmc"),
+        Assignment(10, 3_713_707, 2, "cell.pmc", 1),
+        Assignment(8008, 0xAF8018, 3, "cell.pmc", 1),
+        Assignment(8009, 64, 3, "cell.pmc", 15),
+        Assignment(5193, 0x350A, 4, "cell.pmc", 1),
+        Assignment(5194, 8_388_607, 5, "cell.pmc", 1),
     )
-    assert assignments[3].where == "cell.pmc line 4"
+    assert assignments[3].where == "cell.pmc:4:1"
 
 
 def test_cs_numbering_pmac_and_turbo() -> None:
     assert cs_ivar(193) == (1, 93) and cs_ivar(894) == (8, 94)
     assert cs_ivar(5193) == (1, 93) and cs_ivar(5894) == (8, 94)
-    assert cs_ivar(93) is None and cs_ivar(995) is None and cs_ivar(195) is None
+    assert cs_ivar(93) is None and cs_ivar(995) is None and cs_ivar(196) is None and cs_ivar(192) is None
+    assert cs_ivar(195) == (1, 95) and cs_ivar(5887) == (8, 87)
+
+
+VALUE = r"is not a value \(write a number: decimal, \$hex or @In; a variable; or an expression of them\)$"
 
 
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("I10=3713707\nI130=2000", r"cell.pmc line 2: I130 is not an I-variable this model knows \(known: I10; Ix93"),
-        ("I7000=1", r"cell.pmc line 1: I7000 is not an I-variable"),
-        ("I194=8388608", r"cell.pmc line 1: I194 \(Ix94, time-base slew limit\) = 8388608 is not allowed "
+        ("I10=3713707\nI130=2000",
+         r"^cell.pmc:2:1: I130 is not an I-variable this model knows \(known: I10; Ix87..Ix89 and Ix93..Ix95"),
+        ("I7000=1", r"^cell.pmc:1:1: I7000 is not an I-variable"),
+        ("I194=8388608", r"^cell.pmc:1:1: I194 \(Ix94, time-base slew limit\) = 8388608 is not allowed "
                          r"\(allowed: integers 0..8388607"),
-        ("\n\nI5194=-1", r"cell.pmc line 3: I5194 \(Ix94, time-base slew limit\) = -1 is not allowed"),
-        ("I10=0", r"I10 \(servo interrupt time\) = 0 is not allowed \(allowed: integers 1..8388607"),
+        ("\n\nI5194=-1", r"^cell.pmc:3:1: I5194 \(Ix94, time-base slew limit\) = -1 is not allowed"),
+        ("I10=0", r"^cell.pmc:1:1: I10 \(servo interrupt time\) = 0 is not allowed \(allowed: integers 1..8388607"),
         ("I8011=2184.5",
-         r"cell.pmc line 1: I8011 \(conversion table line\) = 2184.5 is not allowed \(allowed: integers"),
+         r"^cell.pmc:1:1: I8011 \(conversion table line\) = 2184.5 is not allowed \(allowed: integers"),
         ("I8011=$1000000",
-         r"I8011 \(conversion table line\) = 16777216 is not allowed \(allowed: integers 0..16777215"),
-        ("I10=fast", r"cell.pmc line 1: I10 = 'fast' is not a number"),
+         r"^cell.pmc:1:1: I8011 \(conversion table line\) = 16777216 is not allowed \(allowed: integers 0..16777215"),
+        ("I10=fast", rf"^cell.pmc:1:5: 'fast' {VALUE}"),
         # non-finite and absurdly large values are refused at once (issue 22: a crash, or a hang for 1e99999999)
-        ("I10=Infinity", r"^cell.pmc line 1: I10 = 'Infinity' is not allowed \(allowed: a finite number\)$"),
-        ("I10=sNaN", r"^cell.pmc line 1: I10 = 'sNaN' is not allowed \(allowed: a finite number\)$"),
+        ("I10=Infinity", rf"^cell.pmc:1:5: 'Infinity' {VALUE}"),
+        ("I10=sNaN", rf"^cell.pmc:1:5: 'sNaN' {VALUE}"),
         ("I10=1e99999999",
-         r"^cell.pmc line 1: I10 = '1e99999999' is not allowed \(allowed: a finite number of magnitude <= 1e300\)$"),
-        ("I194=1e300", r"^cell.pmc line 1: I194 \(Ix94, time-base slew limit\) = 1e\+300 is not allowed "
-                       r"\(allowed: integers 0..8388607 \(2\^-23 ms per servo cycle\)\)$"),
-        ("I193=@I10", r"I193 \(address of I10\) = '@I10' is not allowed \(allowed: @I8000..@I8191\)"),
-        ("CLOSE", r"cell.pmc line 1: 'CLOSE' is not an I-variable assignment"),
-        ("I10=3713707 #1->X", r"'#1->X' is not an I-variable assignment"),
+         r"^cell.pmc:1:6: syntax error: unexpected 'e99999999' \(PMAC numbers are written without an exponent\)$"),
+        ("I10=" + "9" * 5000, r"^cell.pmc:1:5: number = 9999999999999999999999999999999999999... is not allowed "
+                              r"\(allowed: at most 15 integer and 30 fraction digits"),
+        ("I194=100000000000000", r"^cell.pmc:1:1: I194 \(Ix94, time-base slew limit\) = 100000000000000 is not "
+                                 r"allowed \(allowed: integers 0..8388607 \(2\^-23 ms per servo cycle\)\)$"),
+        ("I193=@I10", r"^cell.pmc:1:6: @I10 = address of I10 is not allowed \(allowed: @I8000..@I8191"),
+        ("&1", r"^cell.pmc:1:1: '&1' is not an I-variable assignment"),
+        ("I10=3713707 #1->X", r"^cell.pmc:1:13: '#1->X' is not an I-variable assignment"),
+        ("I10=P1", r"^cell.pmc:1:1: 'I10=P1' is not an I-variable assignment"),
     ],
 )
 def test_setup_errors_name_line_variable_value_and_range(text: str, message: str) -> None:
     with pytest.raises(ConfigurationError, match=message):
         parse_setup(text, source="cell.pmc")
+
+
+def test_close_and_comments_alone_are_an_empty_setup() -> None:
+    """Setup files often start with CLOSE (no buffer open): nothing to apply."""
+    assert parse_setup("CLOSE ; make sure no buffer is open\n; only a comment\n\n") == ()
 
 
 def test_manual_example_loads_into_the_machine(sim: Simulation) -> None:
@@ -100,12 +114,12 @@ def test_setup_with_an_untriggered_entry_and_pmac_style_numbers(sim: Simulation)
     ("text", "message"),
     [
         ("I8010=$978008", r"I8010 = \$978008 starts a two-line time-base entry, but its SCALE_FACTOR line I8011"),
-        ("I8010=$978008\nI8011=0", r"setup line 2: SCALE_FACTOR \(I8011\) = 0 is not allowed \(allowed: integers "
+        ("I8010=$978008\nI8011=0", r"setup:2:1: SCALE_FACTOR \(I8011\) = 0 is not allowed \(allowed: integers "
                                    r"1..8388607\)"),
-        ("I8010=$C78008\nI8011=64", r"setup line 1: I8010 \(method digit \$C\) = \$C78008 is not allowed "
+        ("I8010=$C78008\nI8011=64", r"setup:1:1: I8010 \(method digit \$C\) = \$C78008 is not allowed "
                                     r"\(allowed: method digits \$0 \(1/T\), \$4 \(time base\), \$9"),
         ("I8010=$978008\nI8011=64\nI193=1833",
-         r"setup line 3: I193 \(Ix93 of CS1\) = \$0729 \(1833\) is not allowed "
+         r"setup:3:1: I193 \(Ix93 of CS1\) = \$0729 \(1833\) is not allowed "
          r"\(allowed: addresses of time-base registers: \$2000 \(CS1 % register\), "
          r"\$350C \(TriggeredTimeBaseEntry result\)\)"),
     ],

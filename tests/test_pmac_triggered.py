@@ -17,6 +17,7 @@ from cosim.controllers.pmac.ect import ARMED, FROZEN, RUNNING, TriggeredTimeBase
 from cosim.controllers.pmac.motion import LinearMove, compile_items
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
+from cosim.signals import Signal
 from cosim.timebase import Priority
 
 MOVE = LinearMove(3000, 64_000, 10)
@@ -57,11 +58,14 @@ def test_triggered_start_time_zero_is_master_position_at_trigger(sim: Simulation
     assert start.t == clock.t(clock.first_cycle_at_or_after(t_mark))  # seen at the next servo cycle
     assert rig.entry.method == RUNNING
     (segment,) = compile_items([MOVE], {"X": Fraction(0)})
-    for t, cmd, pos256 in rows:
-        if t < start.t:
-            assert cmd == 0
-        else:  # program time = master travel since the mark / 64 counts per ms, exactly
-            assert cmd == segment.position(Fraction(2 * 256 * (pos256 - start.time_zero_pos256), 2**23))
+    assert len(rows) == 80
+    before = [cmd for t, cmd, _pos in rows if t < start.t]
+    after = [(cmd, pos256) for t, cmd, pos256 in rows if t >= start.t]
+    assert len(before) == 36 and len(after) == 44  # the mark at 15.63 ms falls in cycle 36
+    assert before == [0] * 36
+    for cmd, pos256 in after:  # program time = master travel since the mark / 64 counts per ms, exactly
+        assert cmd == segment.position(Fraction(2 * 256 * (pos256 - start.time_zero_pos256), 2**23))
+    assert after[-1][0] > 0
     times, values = sim.trace.edges("pmac.ect.method")
     assert times.tolist() == [0, 2_000_000, start.t] and values.tolist() == [FROZEN, ARMED, RUNNING]
 
@@ -129,5 +133,32 @@ def test_master_position_signal_is_the_undifferentiated_1_256_position(sim: Simu
     rig.pmac.start()
     sim.run(until=rig.pmac.clock.t(10) + 1)
     t, v = sim.trace.edges("pmac.ect.master_pos")
+    assert t[1:].tolist() == [rig.pmac.clock.t(k) for k in range(1, 11)]  # one new value every servo cycle
     for ti, vi in zip(t[1:], v[1:], strict=True):
         assert 0 <= belt.position(int(ti)) - Fraction(vi) < Fraction(1, 256)
+
+
+def test_the_frozen_entry_reads_the_capture_register_every_servo_cycle(sim: Simulation) -> None:
+    """Turbo SRM: "When this entry is in the frozen state, the table reads the channel's capture position
+    register each servo cycle". A trigger pulse in every servo interval: each is latched (the previous
+    cycle's read re-armed the capture) and each servo cycle leaves the flag clear. Reading every other
+    cycle would lose every second pulse and leave the flag set after half the cycles.
+
+        servo     |    |    |    |    |        cycles 1..20
+        trigger    _|‾|__|‾|__|‾|__|‾|_         one pulse 100..200 us after each interrupt
+        flag       _|‾‾|_|‾‾|_|‾‾|_|‾‾|_        cleared by the frozen entry's read at every interrupt
+    """
+    belt = IdealConveyor(sim, speed_counts_per_ms=64)
+    trigger = Signal(sim, "test.trigger", kind="bit")
+    rig = rigs.triggered_time_base(sim, belt, trigger, scale_factor=256, method=FROZEN)
+    clock = rig.pmac.clock
+    for k in range(1, 21):
+        sim.call_at(clock.t(k) + 100_000, Priority.HOST, lambda: trigger.set(1))
+        sim.call_at(clock.t(k) + 200_000, Priority.HOST, lambda: trigger.set(0))
+    flags = record_each_cycle(sim, clock, lambda k, t: rig.channel.capture_flag, cycles=22)
+    rig.pmac.start()
+    sim.run(until=clock.t(22))
+    assert len(rig.channel.captures) == 20
+    assert [t for t, _ in rig.channel.captures] == [clock.t(k) + 100_000 for k in range(1, 21)]
+    assert flags == [False] * 22  # after every servo cycle, the frozen entry's read has cleared the flag
+    assert rig.entry.result == 0 and rig.entry.starts == []

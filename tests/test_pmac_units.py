@@ -7,7 +7,6 @@ from fractions import Fraction
 import pytest
 
 from cosim.controllers.pmac.units import (
-    I10_DEFAULT,
     Reg,
     ServoClock,
     formula_percent,
@@ -27,7 +26,7 @@ def test_default_servo_interrupts_are_floor_of_exact_instants() -> None:
         t_ns  0     442708   885416  1328125
     """
     clock = ServoClock()
-    assert clock.i10 == I10_DEFAULT
+    assert clock.i10 == 3_713_707
     assert clock.period_ns == Fraction(3_713_707 * 10**6, 2**23)
     assert [clock.t(k) for k in range(4)] == [0, 442_708, 885_416, 1_328_125]
     assert {clock.t(k + 1) - clock.t(k) for k in range(1000)} == {442_708, 442_709}
@@ -37,7 +36,8 @@ def test_servo_clock_never_drifts_from_real_time() -> None:
     """After a million cycles the interrupt is still within 1 ns of k * period (no accumulation)."""
     clock = ServoClock()
     for k in (10**3, 10**6, 10**9):
-        assert 0 <= k * clock.period_ns - clock.t(k) < 1
+        assert 0 <= k * Fraction(3_713_707 * 10**6, 2**23) - clock.t(k) < 1
+    assert clock.t(10**9) == 442_708_373_069_763  # floor(10^9 * 3,713,707 * 10^6 / 2^23) ns
 
 
 def test_servo_clock_at_10_ns_resolution_floors_the_same_instants_to_10_ns_ticks() -> None:
@@ -72,8 +72,9 @@ def test_i10_out_of_range(i10: object) -> None:
 
 
 def test_percent_and_time_base_conversions() -> None:
-    assert percent(I10_DEFAULT, I10_DEFAULT) == 100
-    assert percent(I10_DEFAULT // 2, I10_DEFAULT) == Fraction(100 * (I10_DEFAULT // 2), I10_DEFAULT)
+    assert percent(3_713_707, 3_713_707) == 100
+    assert percent(1_856_853, 3_713_707) == Fraction(185_685_300, 3_713_707)  # 49.99998654 %
+    assert percent(2**20, 2**21) == 50
     assert timebase_for_percent(50, 2**21) == 2**20
     assert formula_percent(2048, 64) == 100
     assert formula_percent(2048, 48) == 75

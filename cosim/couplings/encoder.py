@@ -16,12 +16,16 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 from cosim.couplings.roles import required, resolve
 from cosim.encoders import EncoderSample, extend_one_over_t
 from cosim.errors import ConfigurationError
 from cosim.master import PlantLike
 from cosim.signals import Signal
+
+if TYPE_CHECKING:
+    from cosim.controllers.pmac.ports import EncoderPort
 
 ROLES: dict[str, str | None] = {"count": "encoder_count", "direction": "edge_direction",
                                 "t_last_edge": "t_last_edge", "t_prev_edge": "t_prev_edge"}
@@ -107,3 +111,23 @@ def watch_mark(plant: PlantLike, *, signal: str | None = None,
                                               "3 (FMI 3.0 with early return, to locate mark edges exactly)")
     names = resolve(plant, "mark", MARK_ROLES, variables)
     return plant.watch(required(names, "mark"), signal=signal)
+
+
+def couple_encoder(port: EncoderPort, plant: PlantLike, *,
+                   variables: Mapping[str, str | None] | None = None) -> PlantEncoder:
+    """A plant's encoder (and its mark output, if the port has a trigger) as a PMAC encoder channel.
+
+    Parameters
+    ----------
+    port : EncoderPort
+        The controller's encoder input (``pmac.encoder_port(...)``, or a machine file's
+        ``encoder = { channel = "$078018", trigger = "mark" }``).
+    plant : PlantLike
+        A Conveyor plant (FMI 3.0 for a trigger) or any plant with the roles of :data:`ROLES`.
+    variables : mapping role -> variable, optional
+        The plant's names for the encoder roles, where they differ.
+    """
+    encoder = PlantEncoder(plant, variables=variables)
+    trigger = watch_mark(plant, variables={"mark": port.trigger}) if port.trigger is not None else None
+    port.connect(encoder, trigger)
+    return encoder

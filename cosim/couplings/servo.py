@@ -19,9 +19,11 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from fractions import Fraction
+from typing import TYPE_CHECKING
 
 import control
 import numpy as np
@@ -31,9 +33,13 @@ from cosim.controllers.pmac.servo import DAC_MAX, DAC_VOLTS_PER_BIT, MotorModel,
 from cosim.couplings.encoder import ROLES as ENCODER_ROLES
 from cosim.couplings.encoder import PlantEncoder
 from cosim.couplings.roles import required, resolve
+from cosim.errors import ConfigurationError
 from cosim.master import PlantLike
 from cosim.plants.servo import ServoParameters, linear_model
 from cosim.validate import integer
+
+if TYPE_CHECKING:
+    from cosim.controllers.pmac.ports import ServoPort
 
 ROLES: dict[str, str | None] = {"command": "u_cmd", **ENCODER_ROLES}
 """Roles of the servo coupling and the Servo FMU's variables that play them."""
@@ -121,3 +127,30 @@ def full_scale_speed_counts_per_ms(params: ServoParameters, *,
     model = servo_motor_model(params, volts_per_bit=volts_per_bit)
     volts = min(DAC_MAX * float(volts_per_bit), params.supply_voltage / params.amplifier_gain)
     return model.gain_counts_per_s_per_bit * volts / float(volts_per_bit) / 1000
+
+
+def servo_parameters(plant: PlantLike) -> ServoParameters:
+    """The motor and amplifier parameters of a Servo plant, read from the plant itself."""
+    names = [f.name for f in dataclasses.fields(ServoParameters)]
+    missing = [n for n in names if n not in plant.variable_names()]
+    if missing:
+        raise ConfigurationError(f"servo coupling of {plant.name}: the plant has no parameter {missing[0]!r}, so the "
+                                 "PID's design model cannot be derived from it; give the model in the coupling "
+                                 "(gain_counts_per_s_per_bit and tau_s)")
+    values = {n: plant.read(n) for n in names}
+    values["counts_per_rev"] = int(values["counts_per_rev"])
+    return ServoParameters(**values)  # type: ignore[arg-type]
+
+
+def couple_servo(port: ServoPort, plant: PlantLike, *,
+                 variables: Mapping[str, str | None] | None = None) -> PidDesign:
+    """Close a PMAC motor's loop around a servo plant with a PID designed for the port's bandwidth.
+
+    The design model is the port's own (a user's FMU), or :func:`servo_motor_model` of the plant's
+    parameters (the Servo FMU); then :func:`connect_servo` joins DAC -> command and encoder ->
+    feedback. Returns the design (bandwidth, margins).
+    """
+    model = port.model or servo_motor_model(servo_parameters(plant))
+    design = port.close_loop(model)
+    connect_servo(port.motor, plant, variables=variables)
+    return design

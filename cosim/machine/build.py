@@ -15,7 +15,9 @@ from pathlib import Path
 from typing import Any
 
 from cosim.controllers.scripted import play
+from cosim.couplings.encoder import couple_encoder
 from cosim.couplings.laser import couple_laser
+from cosim.couplings.servo import couple_servo
 from cosim.couplings.stepper import couple_stepper
 from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError
@@ -26,7 +28,8 @@ from cosim.master import PlantLike
 from cosim.scenario import Run
 
 #: Couplings a plant table may name, with the function that joins a port to the plant.
-COUPLINGS = {"stepper": couple_stepper, "laser": couple_laser, "switches": None}
+COUPLINGS = {"stepper": couple_stepper, "laser": couple_laser, "switches": None, "encoder": couple_encoder,
+             "servo": couple_servo}
 PLANT_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 

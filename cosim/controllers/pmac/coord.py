@@ -18,6 +18,17 @@ slave should have (slip-free), for the sync error.
 
 The first servo cycle of a coordinate system takes the source value as its actual value (no
 slew from an arbitrary power-on value).
+
+Feed hold (``H``) slews the actual value to 0 at Ix95 per cycle, whatever the source; ``R`` slews it
+back to the source at Ix95. Under external time base the master travel missed meanwhile is slip,
+as with Ix94.
+
+Programs
+--------
+:meth:`CoordinateSystem.run_program` runs a list of moves (all compiled at once);
+:meth:`CoordinateSystem.run_feeder` runs a motion program that is calculated as it goes (a
+:class:`Feeder`, e.g. a program read from text): every servo cycle, before and after the moves
+advance, the feeder may queue more (:meth:`CoordinateSystem.queue`).
 """
 
 from __future__ import annotations
@@ -28,7 +39,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol
 
 from cosim import validate
-from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner
+from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner, Segment, compile_item
 from cosim.controllers.pmac.units import IX94_ALLOWED, IX94_DEFAULT, IX94_MAX, REG_MAX, hexaddr, percent
 from cosim.errors import ConfigurationError
 from cosim.signals import Signal
@@ -87,6 +98,19 @@ class PercentRegister:
         return float(Fraction(1 << 23, self.i10) * 100)
 
 
+class Feeder(Protocol):
+    """A motion program calculated while it runs (see :mod:`cosim.controllers.pmac.interpreter`)."""
+
+    @property
+    def finished(self) -> bool:
+        """True when the program has nothing more to queue."""
+        ...
+
+    def calculate(self, cs: CoordinateSystem, t: int) -> None:
+        """Run the program's statements at servo instant ``t``, queueing moves with ``cs.queue``."""
+        ...
+
+
 @dataclass(frozen=True)
 class LimitEvent:
     """A servo cycle in which Ix94 limited the time base.
@@ -136,6 +160,12 @@ class CoordinateSystem:
         self.ix93 = self.percent_register.address
         self.source: TimeBaseSource = self.percent_register
         self.axes = {axis: Fraction(0) for axis in axes}
+        self.ix95 = IX94_DEFAULT
+        self.ix87: int = 0  # default TA [ms]
+        self.ix88: int = 50  # default TS [ms]
+        self.ix89: Fraction = Fraction(1000)  # default F [axis units/s]
+        self.holding = False
+        self.releasing = False
         self.actual = 0
         self.source_value = 0
         self.slip_units = 0
@@ -143,7 +173,10 @@ class CoordinateSystem:
         self.notes: list[tuple[int, str]] = []
         self._runner: ProgramRunner | None = None
         self._ideal: ProgramRunner | None = None
-        self._pending: tuple[list[Item], str] | None = None
+        self._pending: list[Item] | Feeder | None = None
+        self._feeder: Feeder | None = None
+        self._end: dict[str, Fraction] = {}
+        self._ideal_end: dict[str, Fraction] = {}
         self._started = False
         p = f"{device}.cs{number}"
         self._tb = Signal(sim, f"{p}.timebase", kind="int", unit="2^-23 ms", description="actual time-base value")
@@ -160,6 +193,11 @@ class CoordinateSystem:
         """True if the time-base source is a conversion-table result (external time base)."""
         return self.source.units_per_count is not None
 
+    def define_axis(self, axis: str) -> None:
+        """Add ``axis`` (a motor definition ``#n->...axis`` names it), at position 0."""
+        if axis not in self.axes:
+            self.axes[axis] = Fraction(0)
+
     def set_source(self, address: int, source: TimeBaseSource) -> None:
         """Point Ix93 at ``source`` (the machine resolves and validates the address)."""
         self.ix93 = address
@@ -170,9 +208,23 @@ class CoordinateSystem:
         self.ix94 = validate.integer(value, f"I{self.number}94 (Ix94)", low=0, high=IX94_MAX, where=where,
                                      allowed=IX94_ALLOWED)
 
+    def set_ix95(self, value: object, *, where: str = "") -> None:
+        """Set Ix95, the feed-hold slew rate (0..8,388,607)."""
+        self.ix95 = validate.integer(value, f"I{self.number}95 (Ix95)", low=0, high=IX94_MAX, where=where,
+                                     allowed=IX94_ALLOWED)
+
     def command_percent(self, pct: int | Fraction) -> int:
         """Host ``%n``; acts only while Ix93 points at this system's ``%`` register."""
         return self.percent_register.command(pct)
+
+    def hold(self) -> None:
+        """``H``: feed hold, the time base slews to 0 at Ix95 per cycle."""
+        self.holding, self.releasing = True, False
+
+    def release(self) -> None:
+        """``R`` after ``H``: the time base slews back to its source at Ix95 per cycle."""
+        if self.holding:
+            self.holding, self.releasing = False, True
 
     @property
     def percent(self) -> Fraction:
@@ -182,9 +234,35 @@ class CoordinateSystem:
     # -- programs ---------------------------------------------------------------------------
     def run_program(self, items: Iterable[Item]) -> None:
         """Start a motion program (a list of moves); it begins at the next servo cycle."""
-        if self._runner is not None and not self._runner.done:
+        if not self.program_done:
             raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
-        self._pending = (list(items), "program")
+        self._pending = list(items)
+
+    def run_feeder(self, feeder: Feeder) -> None:
+        """Start a motion program that is calculated as it runs; it begins at the next servo cycle."""
+        if not self.program_done:
+            raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
+        self._pending = feeder
+
+    def queue(self, item: Item) -> int:
+        """Append a move to the running program (from a feeder); returns its segment index."""
+        if self._runner is None or self._ideal is None:
+            raise ConfigurationError(f"coordinate system {self.number} runs no program to queue moves to")
+        self._runner.segments.append(compile_item(item, self._end))
+        self._ideal.segments.append(compile_item(item, self._ideal_end))
+        return len(self._runner.segments) - 1
+
+    def segment_done(self, index: int) -> bool:
+        """True once queued segment ``index`` has finished."""
+        return self._runner is None or self._runner.index > index
+
+    def queued_ahead(self) -> int:
+        """Queued segments not finished yet that take time (the current one included)."""
+        return self._runner.queued_ahead() if self._runner is not None else 0
+
+    def program_end(self, axis: str) -> Fraction:
+        """Where ``axis`` is at the end of the moves queued so far [axis units]."""
+        return self._end.get(axis, self.position(axis)) if self._runner is not None else self.position(axis)
 
     def jog(self, target: int | Fraction, *, speed_per_ms: int | Fraction, ta_ms: int | Fraction = 10,
             axis: str = "X") -> None:
@@ -198,7 +276,8 @@ class CoordinateSystem:
     @property
     def program_done(self) -> bool:
         """True when no program or jog is running or pending."""
-        return self._pending is None and (self._runner is None or self._runner.done)
+        return (self._pending is None and self._feeder is None
+                and (self._runner is None or self._runner.done))
 
     def position(self, axis: str) -> Fraction:
         """Commanded position of ``axis`` [axis units]."""
@@ -227,12 +306,21 @@ class CoordinateSystem:
         if not self._started:
             self.actual = source
             self._started = True
-        diff = source - self.actual
-        step = max(-self.ix94, min(self.ix94, diff))
+        hold = self.holding or self.releasing
+        target = 0 if self.holding else source
+        rate = self.ix95 if hold else self.ix94
+        diff = target - self.actual
+        step = max(-rate, min(rate, diff))
         self.actual += step
         limited = step != diff
         external = self.external
-        if limited:
+        if hold:
+            if external:
+                self.slip_units += source - self.actual
+            if self.releasing and not limited:
+                self.releasing = False
+            limited = False
+        elif limited:
             if external:
                 self.slip_units += source - self.actual
                 if not any("Ix94" in n for _, n in self.notes):
@@ -247,21 +335,39 @@ class CoordinateSystem:
         self._slip.set(int(slip) if slip is not None else 0)
         self._active.set(limited)
 
+    def _start_pending(self) -> None:
+        pending, self._pending = self._pending, None
+        start = {axis: self.position(axis) for axis in self.axes}
+        ideal = {axis: self.ideal_position(axis) for axis in self.axes}
+        segments: list[Segment] = []
+        self._runner = ProgramRunner(segments, start)
+        self._ideal = ProgramRunner([], ideal)
+        self._end, self._ideal_end = dict(start), dict(ideal)
+        self.axes = start
+        if isinstance(pending, list):
+            self._feeder = None
+            for item in pending:
+                self.queue(item)
+        else:
+            self._feeder = pending
+
     def _advance_program(self, ideal_units: int, t: int) -> None:
         if self._pending is not None:
-            items, _kind = self._pending
-            self._pending = None
-            start = {axis: self.position(axis) for axis in self.axes}
-            self._runner = ProgramRunner(items, start)
-            self._ideal = ProgramRunner(items, {axis: self.ideal_position(axis) for axis in self.axes})
-            self.axes = start
+            self._start_pending()
         if self._runner is None or self._ideal is None:
             return
+        feeder = self._feeder
+        if feeder is not None:
+            feeder.calculate(self, t)
         if self._runner.in_dwell and self.external and not any("DWELL" in n for _, n in self.notes):
             self.notes.append((t, "DWELL under external time base: it runs in real time, so "
                                      "synchronism with the master is lost"))
         self._runner.advance(self.actual, self.i10)
         self._ideal.advance(ideal_units, self.i10)
+        if feeder is not None:
+            feeder.calculate(self, t)
+            if feeder.finished and self._runner.done:
+                self._feeder = None
 
     def describe_source(self) -> str:
         """Ix93 as text, e.g. ``$2000 (CS1 % register)``."""

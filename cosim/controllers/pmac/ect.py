@@ -255,12 +255,17 @@ class TriggerStart:
         Captured position used as time zero [1/256 count].
     capture_t : int or None
         Instant the capture latched [ticks] (None if the register was never latched).
+    stale : bool
+        True if the capture latched before the entry was last frozen (by a write of $9): the
+        trigger logic was not reset since, so time zero is an old position (the stale-capture
+        hazard of the Turbo manual).
     """
 
     cycle: int
     t: int
     time_zero_pos256: int
     capture_t: int | None
+    stale: bool = False
 
 
 class TriggeredTimeBaseEntry(DifferentiatingEntry):
@@ -295,6 +300,7 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
         self.position = 0
         self.starts: list[TriggerStart] = []
         self.method_changes: list[tuple[int, int]] = []
+        self.frozen_t: int | None = None
         self._channel_obj: EncoderChannel | None = None
 
     def _check_method(self, method: int, *, where: str = "", line_value: int | None = None) -> int:
@@ -320,6 +326,8 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
         """Change the method digit (a write of the first line: ``I8010=$B78008``)."""
         self.method = self._check_method(method)
         self.method_changes.append((t, self.method))
+        if method == FROZEN:
+            self.frozen_t = t
         if method == RUNNING:
             self._prev = None  # time zero = first running cycle's position
 
@@ -353,7 +361,8 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
             if channel.capture_flag:
                 capture_t = channel.capture_t
                 time_zero = channel.read_capture()
-                self.starts.append(TriggerStart(table.cycle, t, time_zero, capture_t))
+                stale = capture_t is not None and self.frozen_t is not None and capture_t < self.frozen_t
+                self.starts.append(TriggerStart(table.cycle, t, time_zero, capture_t, stale))
                 self.method = RUNNING
                 self.method_changes.append((t, RUNNING))
                 self._prev = time_zero

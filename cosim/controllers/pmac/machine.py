@@ -14,6 +14,10 @@ previous position before its first difference means anything.
 The host (a scenario's script, a PLC stand-in) acts between interrupts through
 :meth:`Pmac.set_ivar` (e.g. ``I8010=$B78008`` to arm), :meth:`Pmac.command_percent` (``%n``) and
 :meth:`Pmac.read_x` (a dummy read of a capture register), normally with priority ``HOST``.
+
+Programs as text: :meth:`Pmac.load` reads a PMAC file (I-variables, M-variable definitions,
+``&1 #1->1000X``, ``OPEN PROG``/``OPEN PLC`` buffers, online commands) and :meth:`Pmac.command`
+issues a line of online commands (``&1 B1 R``); see :mod:`.runtime` for when programs run.
 """
 
 from __future__ import annotations
@@ -31,10 +35,12 @@ from cosim.controllers.pmac.ect import (
     OneOverTEntry,
     TriggeredTimeBaseEntry,
 )
-from cosim.controllers.pmac.encoder import EncoderChannel, EncoderSource
+from cosim.controllers.pmac.encoder import CAPTURE_OFFSET, EncoderChannel, EncoderSource
 from cosim.controllers.pmac.motor import Motor
+from cosim.controllers.pmac.runtime import Programs
 from cosim.controllers.pmac.servo import PidLoop
-from cosim.controllers.pmac.units import I10_DEFAULT, Reg, ServoClock, hexaddr
+from cosim.controllers.pmac.setupfile import parse_setup
+from cosim.controllers.pmac.units import I10_DEFAULT, REG_MASK, Reg, ServoClock, hexaddr
 from cosim.errors import ConfigurationError
 from cosim.signals import PulseTrain, Signal
 from cosim.timebase import Priority
@@ -96,6 +102,14 @@ class Pmac:
         self._master_pos: Signal | None = None
         self._method: Signal | None = None
         self._time_zero: Signal | None = None
+        self._stale: Signal | None = None
+        self.motor_ivars: dict[tuple[int, int], int | Fraction] = {}
+        self.programs = Programs(self)
+
+    @property
+    def started(self) -> bool:
+        """True once the servo clock runs."""
+        return self._started
 
     @property
     def i10(self) -> int:
@@ -129,6 +143,37 @@ class Pmac:
         self.motors[number] = motor
         return motor
 
+    def define_motor(self, number: int, *, cs: int, axis: str, counts_per_unit: int | Fraction,
+                     where: str = "") -> Motor:
+        """``&cs #number->counts_per_unit axis``: a motor on an axis of a coordinate system (before start)."""
+        prefix = f"{where}: " if where else ""
+        if self._started:
+            raise ConfigurationError(f"{prefix}#{number}->{axis}: motors are defined before the servo clock starts")
+        if number in self.motors:
+            old = self.motors[number]
+            raise ConfigurationError(f"{prefix}#{number}->{counts_per_unit}{axis}: motor {number} is already defined "
+                                     f"(on axis {old.axis} of coordinate system {old.cs.number})")
+        self.coordinate_system(cs).define_axis(axis)
+        return self.add_motor(number, cs=cs, axis=axis, counts_per_unit=counts_per_unit)
+
+    def motor_axes(self, cs: int) -> set[str]:
+        """Axes of coordinate system ``cs`` that a motor is assigned to."""
+        return {m.axis for m in self.motors.values() if m.cs.number == cs}
+
+    def motor_on(self, cs: int, axis: str) -> Motor:
+        """The (first) motor on ``axis`` of coordinate system ``cs``."""
+        for motor in self.motors.values():
+            if motor.cs.number == cs and motor.axis == axis:
+                return motor
+        raise ConfigurationError(f"axis {axis} of coordinate system {cs} has no motor (define one with #n->{axis})")
+
+    def rapid_parameters(self, cs: int, axis: str) -> tuple[Fraction, Fraction, Fraction]:
+        """RAPID speed [axis units/ms], TA and TS [ms] of ``axis``: its motor's Ixx22, Ixx20, Ixx21."""
+        motor = self.motor_on(cs, axis)
+        speed = Fraction(self.get_ivar(motor.number * 100 + 22)) / abs(motor.counts_per_unit)
+        return (speed, Fraction(self.get_ivar(motor.number * 100 + 20)),
+                Fraction(self.get_ivar(motor.number * 100 + 21)))
+
     def time_base_registers(self) -> dict[int, TimeBaseSource]:
         """Every register Ix93 may point at: ``%`` command registers and table time-base results."""
         registers: dict[int, TimeBaseSource] = {cs.percent_register.address: cs.percent_register
@@ -153,11 +198,20 @@ class Pmac:
         cs.set_source(address, source)
 
     # -- I-variables -----------------------------------------------------------------------
-    def set_ivar(self, number: int, value: int, *, where: str = "") -> None:
+    def set_ivar(self, number: int, value: int | Fraction, *, where: str = "") -> None:
         """Write I-variable ``number`` (like typing ``In=value``; at run time from the host)."""
-        value = ivars.check_ivar(number, value, where=where)
+        checked = ivars.check_ivar(number, value, where=where)
         name = f"I{number}"
         cs_var = ivars.cs_ivar(number)
+        motor_var = ivars.motor_ivar(number)
+        if motor_var is not None:
+            self.motor_ivars[motor_var] = checked
+            return
+        if isinstance(checked, Fraction):  # Ix89, the only exact-number CS variable
+            assert cs_var is not None
+            self.coordinate_system(cs_var[0]).ix89 = checked
+            return
+        value = checked
         if number == 10:
             if self._started:
                 raise ConfigurationError(f"{where + ': ' if where else ''}I10 cannot change while the servo "
@@ -168,23 +222,35 @@ class Pmac:
             self.clock = ServoClock(value, self.clock.t0, self.clock.ns_per_tick)
         elif cs_var is not None:
             x, suffix = cs_var
+            cs = self.coordinate_system(x)
             if suffix == 93:
                 self.set_ix93(x, value, where=where, ivar=f"{name} (Ix93 of CS{x})")
+            elif suffix == 94:
+                cs.set_ix94(value, where=where)
+            elif suffix == 95:
+                cs.set_ix95(value, where=where)
+            elif suffix == 87:
+                cs.ix87 = value
             else:
-                self.coordinate_system(x).set_ix94(value, where=where)
+                cs.ix88 = value
         else:
             self._write_ect_line(number - ivars.ECT_FIRST, value, where=where)
 
-    def get_ivar(self, number: int) -> int:
+    def get_ivar(self, number: int) -> int | Fraction:
         """Read I-variable ``number``."""
         if not ivars.is_known(number):
             ivars.check_ivar(number, 0)  # raises: unknown variable
         cs_var = ivars.cs_ivar(number)
+        motor_var = ivars.motor_ivar(number)
         if number == 10:
             return self.i10
+        if motor_var is not None:
+            return self.motor_ivars.get(motor_var, ivars.MOTOR_DEFAULTS[motor_var[1]])
         if cs_var is not None:
             cs = self.coordinate_system(cs_var[0])
-            return cs.ix93 if cs_var[1] == 93 else cs.ix94
+            values: dict[int, int | Fraction] = {87: cs.ix87, 88: cs.ix88, 89: cs.ix89, 93: cs.ix93, 94: cs.ix94,
+                                                 95: cs.ix95}
+            return values[cs_var[1]]
         address = self.table.base_address + number - ivars.ECT_FIRST
         entry = self.table.entry_at(address)
         return entry.y_word(address - entry.address) if entry is not None else 0
@@ -209,24 +275,82 @@ class Pmac:
                 f"{where + ': ' if where else ''}{name} = {hexaddr(value, 6)}: only the method digit of a "
                 "triggered entry and the SCALE_FACTOR line of a time-base entry can change in this model")
 
+    def build_table(self, lines: dict[int, int], *, where: dict[int, str]) -> None:
+        """Build the (empty) conversion table from setup lines ``{index: value}`` (I8000 + index)."""
+        if self.table.entries:
+            raise ConfigurationError(f"{next(iter(where.values()), 'setup')}: sets conversion-table lines, but the "
+                                     "table already has entries")
+        self.table = ConversionTable.from_lines(lines, base_address=TURBO_ECT_BASE, where=where)
+
     def load_setup(self, text: str, *, source: str = "setup") -> None:
         """Apply a setup file: its I8000..I8191 lines build the table, then the rest in file order."""
         if self._started:
             raise ConfigurationError("load the setup before start()")
-        assignments = ivars.parse_setup(text, source=source)
-        lines = {a.number - ivars.ECT_FIRST: a.value for a in assignments if a.number >= ivars.ECT_FIRST}
+        assignments = parse_setup(text, source=source)
+        lines = {a.number - ivars.ECT_FIRST: int(a.value) for a in assignments if a.number >= ivars.ECT_FIRST}
         if lines:
             if self.table.entries:
                 raise ConfigurationError(f"{source}: sets conversion-table lines, but the table already has entries")
             where = {a.number - ivars.ECT_FIRST: a.where for a in assignments if a.number >= ivars.ECT_FIRST}
-            self.table = ConversionTable.from_lines(lines, base_address=TURBO_ECT_BASE, where=where)
+            self.build_table(lines, where=where)
         for a in (a for a in assignments if a.number < ivars.ECT_FIRST):
             self.set_ivar(a.number, a.value, where=a.where)
+
+    def load(self, text: str, *, source: str = "program.pmc") -> None:
+        """Read a PMAC file (setup, definitions, programs, commands; see :mod:`.program`), before start.
+
+        Raises
+        ------
+        ConfigurationError
+            ``source:line:column: ...``. The whole file is parsed and checked first, so a syntax or
+            range error applies nothing; an error that only applying shows (an Ix93 naming no
+            time-base register) stops the load there.
+        """
+        if self._started:
+            raise ConfigurationError(f"{source}: load PMAC files before start()")
+        self.programs.load(text, source=source)
+
+    def command(self, text: str, *, source: str = "command") -> None:
+        """Issue a line of online commands now (``&1 B1 R``, ``%50``, ``ENABLE PLC 1``)."""
+        line = self.programs.parse_command(text, source=source)
+        self.programs.execute(line.statements, self.programs.host)
 
     # -- host actions ----------------------------------------------------------------------
     def command_percent(self, number: int, pct: int | Fraction) -> int:
         """``&x %n``: returns the register value written."""
         return self.coordinate_system(number).command_percent(pct)
+
+    # -- registers (M-variables) -------------------------------------------------------------
+    def has_register(self, space: str, address: int) -> bool:
+        """True if the model has register ``space:address`` (X or Y)."""
+        if space == "Y":
+            return self.table.entry_at(address) is not None
+        return (any(address - base in (0, CAPTURE_OFFSET) for base in self.channels)
+                or self.table.entry_at(address) is not None
+                or any(address == cs.percent_register.address for cs in self.cs.values()))
+
+    def describe_registers(self) -> str:
+        """The registers M-variables may name, for messages."""
+        channels = ", ".join(f"X:${a:06X} and X:${a + CAPTURE_OFFSET:06X}" for a in sorted(self.channels))
+        lines = (f"X: and Y:{hexaddr(self.table.entries[0].address)}.." if self.table.entries else "no table lines")
+        return f"encoder channels {channels or '(none)'}; table lines {lines}"
+
+    def read_word(self, space: str, address: int) -> int:
+        """The 24-bit word at ``space:address`` (an X read of a capture register re-arms it)."""
+        if space == "Y":
+            entry = self.table.entry_at(address)
+            if entry is None:
+                raise ConfigurationError.out_of_range("Y-memory address", Reg(address, digits=6),
+                                                      "conversion-table lines (Y words = I8000..I8191)")
+            return entry.y_word(address - entry.address)
+        return self.read_x(address) & REG_MASK
+
+    def write_word(self, space: str, address: int, value: int, *, where: str = "") -> None:
+        """Write a Y word of the conversion table (= the I-variable of that line)."""
+        if space != "Y" or self.table.entry_at(address) is None:
+            raise ConfigurationError.out_of_range(f"{space}-memory address written", Reg(address, digits=6),
+                                                  "Y words of conversion-table lines", where=where)
+        self.set_ivar(ivars.ECT_FIRST + address - self.table.base_address, value, where=where)
 
     def read_x(self, address: int) -> int:
         """Read X-memory ``address`` (e.g. ``M103`` on the capture register X:$07800B: re-arms it)."""
@@ -280,6 +404,10 @@ class Pmac:
                                   description=f"method digit of the {trigger.label()}: 9 frozen, 11 armed, 10 running")
             self._time_zero = Signal(self.sim, f"{self.device}.ect.time_zero_pos", kind="real", initial=float("nan"),
                                      unit="counts", description="captured master position used as time zero")
+            self._stale = Signal(self.sim, f"{self.device}.ect.stale_start", kind="bit",
+                                 description="1 from a triggered start whose capture latched before the entry was "
+                                             "last frozen (the stale-capture hazard)")
+        self.programs.start()
         self._started = True
         self.sim.process(self.servo_cycle())
 
@@ -299,9 +427,12 @@ class Pmac:
                 self._method.set(trigger.method)
                 if trigger.starts and trigger.starts[-1].cycle == k:
                     self._time_zero.set(trigger.starts[-1].time_zero_pos256 / 256)
+                    if self._stale is not None:
+                        self._stale.set(trigger.starts[-1].stale)
             if k > k0:
                 for cs in self.cs.values():
                     cs.update(k, t)
+                self.programs.foreground()
             for motor in self.motors.values():
                 motor.update(k, t)
             k += 1

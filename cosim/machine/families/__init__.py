@@ -22,7 +22,8 @@ class Family(Protocol):
         ...
 
     def port(self, controller: Any, kind: str, table: Table) -> Any:
-        """The controller port a coupling of ``kind`` joins (``stepper``, ``laser``, ``switches``)."""
+        """The controller port a coupling of ``kind`` joins (``stepper``, ``laser``, ``switches``, ``encoder``,
+        ``servo``)."""
         ...
 
     def start(self, run: Run, controller: Any, programs: list[Table], document: Table, *, base: Path) -> None:
@@ -32,7 +33,8 @@ class Family(Protocol):
 
 def families() -> dict[str, Family]:
     """Every family, by its ``family`` key."""
+    from cosim.machine.families.pmac import PmacFamily
     from cosim.machine.families.pokeys import PoKeysFamily
     from cosim.machine.families.trio import TrioFamily
 
-    return {f.name: f for f in (TrioFamily(), PoKeysFamily())}
+    return {f.name: f for f in (TrioFamily(), PoKeysFamily(), PmacFamily())}
