@@ -4,9 +4,13 @@
 recipe, runs it, evaluates every declared check on the trace and writes the results folder:
 
 ``result.json``        scenario, parameter values used, seed, each check, figures, verdict
-``trace.vcd``          every signal, for GTKWave and other waveform viewers
-``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv``
+``trace.vcd``          every signal, for GTKWave and other waveform viewers; ``trace.gtkw`` opens it in
+                       GTKWave; ``trace_digital.vcd`` holds the bits and pulse trains for sigrok/PulseView
+``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv`` and ``trace_wide.csv``
 ``trace_meta.json``    resolution and each signal's kind, unit and description
+
+A long run keeps its trace on disk as it goes (in a temporary folder inside the results folder,
+removed when the results are written): see :mod:`cosim.trace`.
 
 The trace is written even when the run fails half-way (nothing recorded is lost), and the
 result then carries the error.
@@ -144,6 +148,8 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     """
     values = scenario.resolve(overrides)
     with Simulation(seed=seed) as sim:
+        if out is not None:
+            sim.trace.spool_dir = Path(out)  # a long run spills its trace next to its results, not to /tmp
         end = _end_time(sim, until if until is not None else scenario.until)
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
@@ -169,11 +175,14 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         result.simulated_s = sim.timebase.seconds(sim.now)
         if result.error is None:
             _evaluate(run, result, scenario)
-        if out is not None:
-            folder = Path(out)
-            write_trace(sim.trace, folder, formats=formats)
-            (folder / "result.json").write_text(to_json(result.to_dict()))
-            result.out = folder
+        try:
+            if out is not None:
+                folder = Path(out)
+                write_trace(sim.trace, folder, formats=formats)
+                (folder / "result.json").write_text(to_json(result.to_dict()))
+                result.out = folder
+        finally:
+            sim.trace.discard_spill()
     return result
 
 

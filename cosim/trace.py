@@ -240,6 +240,14 @@ class Trace:
         ``spill_rows`` records at a time): :meth:`edges` in bounded memory."""
         return cast("Iterator[tuple[Ints, Floats]]", self._columns(name).chunks())
 
+    def in_time_order(self, name: str) -> bool:
+        """Are the records of a signal (or the pulses of a train: segments and single pulses each) in
+        time order? Recorders append in time order; a reader of :meth:`edge_chunks` relies on it."""
+        if name in self._pulses:
+            train = self._pulses[name]
+            return train.segments.in_order() and train.singles.in_order()
+        return self._columns(name).in_order()
+
     def edges(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
         """``(t, value)`` of a bit/int/real signal: its changes (or samples) in time order."""
         parts = list(self.edge_chunks(name))

@@ -14,7 +14,7 @@ import numpy as np
 
 from cosim.checks.base import Check, Clock, Findings, fmt, pulse_chunks, record_chunks, require_int, require_ticks
 from cosim.checks.result import MAX_REPORTED, Violation
-from cosim.checks.stream import Held
+from cosim.tracecursor import Held
 
 if TYPE_CHECKING:
     from cosim.trace import Trace

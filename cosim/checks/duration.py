@@ -28,8 +28,8 @@ from cosim.checks.base import (
     require_ticks,
 )
 from cosim.checks.result import MAX_REPORTED, Number, Violation
-from cosim.checks.stream import Instants, change_chunks
 from cosim.errors import ConfigurationError
+from cosim.tracecursor import Instants, change_chunks
 
 if TYPE_CHECKING:
     from cosim.trace import Trace

@@ -25,8 +25,8 @@ from cosim.checks.base import (
     require_ticks,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
-from cosim.checks.stream import Held, Position, change_chunks
 from cosim.errors import ConfigurationError
+from cosim.tracecursor import Held, Position, change_chunks
 
 if TYPE_CHECKING:
     from cosim.trace import Trace

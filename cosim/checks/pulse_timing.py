@@ -26,7 +26,7 @@ from cosim.checks.base import (
     require_ticks,
 )
 from cosim.checks.result import MAX_REPORTED, Number, Violation
-from cosim.checks.stream import Int8s, with_previous
+from cosim.tracecursor import Int8s, with_previous
 
 if TYPE_CHECKING:
     from cosim.trace import Trace

@@ -1,8 +1,8 @@
-"""Walking a trace chunk by chunk: what lets a check run in memory bounded by a chunk, not by the run.
+"""Walking a trace chunk by chunk: what lets checks and exports run in memory bounded by a chunk.
 
-A check reads its signals as time-ordered chunks (:meth:`~cosim.trace.Trace.pulse_chunks`,
+A reader takes its signals as time-ordered chunks (:meth:`~cosim.trace.Trace.pulse_chunks`,
 :meth:`~cosim.trace.Trace.edge_chunks`) and carries what it needs from one chunk to the next.
-The helpers here are the carried parts that several checks share:
+The helpers here are the carried parts that several checks and exports share:
 
 * :func:`with_previous`: each chunk with the last instant of the one before (for gaps);
 * :func:`change_chunks`: the changes of a signal (a record whose value differs from the one
