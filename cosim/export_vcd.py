@@ -47,6 +47,8 @@ U8 = npt.NDArray[np.uint8]
 DIGITAL = ("bit", "pulse")
 _BIT, _INT, _REAL = 0, 1, 2
 _POW10 = 10 ** np.arange(19, dtype=np.int64)
+#: Changes turned into text at once (its scratch arrays are about 40 bytes per change).
+_BATCH = 1 << 16
 
 
 def vcd_names(trace: Trace) -> dict[str, tuple[tuple[str, ...], str]]:
@@ -108,8 +110,10 @@ def write_vcd(trace: Trace, path: str | Path, *, digital: str | Path | None = No
         for (view, _), handle in zip(views, handles, strict=True):
             handle.write(view.header(initial))
         for t, v, var in merge_sorted(_tagged(s, k) for k, s in enumerate(streams)):
-            for (view, _), handle in zip(views, handles, strict=True):
-                handle.write(view.changes(t, var, v))
+            for start in range(0, t.size, _BATCH):  # text is made a bounded number of lines at a time
+                part = slice(start, start + _BATCH)
+                for (view, _), handle in zip(views, handles, strict=True):
+                    handle.write(view.changes(t[part], var[part], v[part]))
         for (view, _), handle in zip(views, handles, strict=True):
             if trace.end_t > view.last_t:
                 handle.write(f"#{trace.end_t}\n".encode())
@@ -157,8 +161,9 @@ def _levels(trace: Trace, name: str) -> Iterator[tuple[Ints, Floats]]:
         t, v = t[last], v[last]
         moved = v != np.concatenate([prev, v[:-1]])  # NaN always moves, as in any viewer
         prev = v[-1:]
-        if moved.any():
-            yield t[moved], v[moved]
+        t, v = t[moved], v[moved]
+        for start in range(0, t.size, _BATCH):  # the merge holds about one of these per signal
+            yield t[start:start + _BATCH], v[start:start + _BATCH]
 
 
 def _record_events(trace: Trace, name: str, kind: str) -> Iterator[tuple[Ints, Floats]]:
@@ -264,9 +269,9 @@ class _View:
     def _lines(self, t: Ints, k: Ints, v: Floats, *, timestamps: bool) -> bytes:
         """``#t`` lines where the time moves on, then ``<value><id>`` lines, made for all rows at once.
 
-        Lines are built as byte matrices, one per group of equally long lines (timestamps by their
-        number of digits, bits by their identifier's length, integers by both), and copied into the
-        text at their offsets: no Python work per line but for reals.
+        The short lines (timestamps, bits) are written as the rows of one byte matrix, group by group
+        of equal length, and taken out in order through a mask; the long ones (integers, reals) are
+        formatted one by one and put in between: Python work only for those.
         """
         n = t.size
         if not n:
@@ -277,68 +282,53 @@ class _View:
                 raise ValueError(f"a VCD cannot hold the negative time {int(t[0])}")
             stamp[0] = t[0] != self.last_t
             stamp[1:] = t[1:] != t[:-1]
-        kind, id_len = self.kinds[k], self.id_len[k]
-        stamps: list[tuple[Ints, U8]] = []  # (rows, their lines, all of one length)
+        kind = self.kinds[k]
+        long = kind != _BIT
+        # the lines in order: a row's timestamp line (if any), then its change line
+        change_at = np.arange(n) + np.cumsum(stamp)
+        is_long = np.zeros(n + int(stamp.sum()), dtype=bool)
+        is_long[change_at[long]] = True
+        short_at = np.cumsum(~is_long) - 1  # index of each line among the short ones
+        width = 21 if stamp.any() else 2 + int(self.id_len.max())
+        text = np.zeros((int((~is_long).sum()), max(width, 2 + int(self.id_len.max()))), dtype=np.uint8)
+        length = np.zeros(text.shape[0], dtype=np.int64)
         rows = np.flatnonzero(stamp)
         digits = np.maximum(np.searchsorted(_POW10, t[rows], side="right"), 1)
-        for width in np.unique(digits):
-            these = rows[digits == width]
-            text = (t[these, None] // _POW10[width - 1 - np.arange(width)]) % 10 + 48
-            stamps.append((these, _hstack(_char(b"#"), text, _char(b"\n"))))
-        changes: list[tuple[Ints, U8]] = []
-        for length in np.unique(id_len):
-            same = id_len == length
-            these = np.flatnonzero(same & (kind == _BIT))
-            if these.size:
-                level = (48 + (v[these] != 0)).astype(np.uint8)[:, None]
-                changes.append((these, _hstack(level, self.id_bytes[k[these], :length], _char(b"\n"))))
-            these = np.flatnonzero(same & (kind == _INT))
-            if these.size:
-                bits, n_bits = _binary(v[these].astype(np.int64))
-                for width in np.unique(n_bits):
-                    part = these[n_bits == width]
-                    changes.append((part, _hstack(_char(b"b"), bits[n_bits == width, 64 - width:], _char(b" "),
-                                                  self.id_bytes[k[part], :length], _char(b"\n"))))
-        real_rows = np.flatnonzero(kind == _REAL)
-        real_text = [f"r{x!r} {self.ids[i]}\n".encode()
-                     for x, i in zip(v[real_rows].tolist(), k[real_rows].tolist(), strict=True)]
-        # offsets: each row's timestamp line (if any), then its change line, rows in order
-        stamp_len = np.zeros(n, dtype=np.int64)
-        change_len = np.zeros(n, dtype=np.int64)
-        for these, text in stamps:
-            stamp_len[these] = text.shape[1]
-        for these, text in changes:
-            change_len[these] = text.shape[1]
-        change_len[real_rows] = [len(x) for x in real_text]
-        end = np.cumsum(stamp_len + change_len)
-        begin = end - stamp_len - change_len
-        out = np.empty(int(end[-1]), dtype=np.uint8)
-        for these, text in stamps:
-            out[begin[these, None] + np.arange(text.shape[1])] = text
-        for these, text in changes:
-            out[(begin[these] + stamp_len[these])[:, None] + np.arange(text.shape[1])] = text
-        for row, line in zip(real_rows.tolist(), real_text, strict=True):
-            at = int(begin[row] + stamp_len[row])
-            out[at:at + len(line)] = np.frombuffer(line, dtype=np.uint8)
-        return out.tobytes()
-
-
-def _char(text: bytes) -> U8:
-    return np.frombuffer(text, dtype=np.uint8)[None, :]
-
-
-def _hstack(*parts: npt.NDArray[Any]) -> U8:
-    """Byte columns side by side (a one-row part is repeated for every row)."""
-    n = max(p.shape[0] for p in parts)
-    return np.hstack([np.broadcast_to(p, (n, p.shape[1])).astype(np.uint8) for p in parts])
-
-
-def _binary(x: Ints) -> tuple[U8, Ints]:
-    """Binary digits (two's complement, 64 bits, MSB first) of integers, and how many are needed."""
-    u = x.view(np.uint64)
-    bits = ((u[:, None] >> np.arange(63, -1, -1, dtype=np.uint64)) & np.uint64(1)).astype(np.uint8)
-    lead = np.where(bits.any(axis=1), bits.argmax(axis=1), 63)  # index of the first 1 (0: one digit)
-    return bits + 48, (64 - lead).astype(np.int64)
+        at = short_at[change_at[rows] - 1]
+        number = t[rows].astype(np.uint64)
+        for j in range(int(digits.max(initial=0))):  # digits right to left: a division by 10 is fast
+            number, digit = np.divmod(number, np.uint64(10))
+            place = digits - j
+            some = place >= 1
+            text[at[some], place[some]] = digit[some] + 48
+        text[at, 0] = 35  # '#'
+        text[at, 1 + digits] = 10
+        length[at] = digits + 2
+        id_len = self.id_len[k]
+        for size in np.unique(id_len[~long]):
+            these = np.flatnonzero(~long & (id_len == size))
+            at = short_at[change_at[these]]
+            text[at, 0] = 48 + (v[these] != 0)
+            text[at, 1:1 + size] = self.id_bytes[k[these], :size]
+            text[at, 1 + size] = 10
+            length[at] = size + 2
+        short = text[np.arange(text.shape[1]) < length[:, None]].tobytes()
+        if not long.any():
+            return short
+        # the long lines, each after the short lines before it
+        rows = np.flatnonzero(long)
+        ends = np.concatenate(([0], np.cumsum(length)))[change_at[rows] - np.arange(rows.size)]
+        pieces: list[bytes] = []
+        start = 0
+        mask = (1 << 64) - 1
+        for row, end, value in zip(rows.tolist(), ends.tolist(), v[rows].tolist(), strict=True):
+            pieces.append(short[start:end])
+            code = self.ids[k[row]]
+            pieces.append(f"b{int(value) & mask:b} {code}\n".encode() if kind[row] == _INT
+                          else f"r{value!r} {code}\n".encode())
+            start = end
+        pieces.append(short[start:])
+        return b"".join(pieces)
 
 
 #: GTKWave trace flags (``@`` lines of a save file): binary, signed decimal, analog step, group begin/end,

@@ -51,8 +51,8 @@ _NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z0-9_]+)*$")
 Ints = npt.NDArray[np.int64]
 Floats = npt.NDArray[np.float64]
 Int8s = npt.NDArray[np.int8]
-#: Most pulses in one chunk of :meth:`Trace.pulse_chunks` (about 9 MiB of ``t, dir``).
-CHUNK_PULSES = 1 << 20
+#: Most pulses in one chunk of :meth:`Trace.pulse_chunks` (about 2.3 MiB of ``t, dir``).
+CHUNK_PULSES = 1 << 18
 _VALUE_FIELDS = (("t", "q"), ("v", "d"))
 _SEGMENT_FIELDS = (("t0", "q"), ("duration", "q"), ("count", "q"), ("dir", "b"))
 _SINGLE_FIELDS = (("t", "q"), ("dir", "b"))
@@ -96,7 +96,7 @@ class Trace:
         Rows of one table kept in memory; more go to disk in chunks of this size (default 65,536:
         about 1 MiB per signal). A run shorter than that never touches the disk.
     chunk_pulses : int
-        Most pulses materialised at once by :meth:`pulse_chunks` (default 1,048,576).
+        Most pulses materialised at once by :meth:`pulse_chunks` (default 262,144).
     spool : path, optional
         Folder in which to make the spill folder (default: the system's temporary folder); see
         :attr:`spool_dir`.

@@ -162,7 +162,10 @@ class HostApp:
                  start_ns: int = 0, keep_fills: int = 1000) -> None:
         self.sim = sim
         self.engine = engine
-        self.entries: list[Entry] = [_checked(engine, e, i) for i, e in enumerate(entries)]
+        # equal entries share one object: a job of an hour holds millions of slots, mostly repeats
+        shared: dict[Entry, Entry] = {}
+        self.entries: list[Entry] = [shared.setdefault(raw, raw) for raw in
+                                     (_checked(engine, e, i) for i, e in enumerate(entries))]
         self.link = Link(sim, link)
         self.period_ns = integer(period_ns, "period_ns", low=1, high=10**10, unit="ns")
         self.period = sim.ticks(period_ns, "ns", name="period_ns")
