@@ -85,7 +85,7 @@ def child(job: str, vcd: bool, out: Path) -> dict[str, Any]:
 
 def measure(job: str, vcd: bool, out: Path) -> dict[str, Any]:
     """Run ``job`` in a fresh process; its measurements."""
-    done = subprocess.run([sys.executable, __file__, "--child", job, "--vcd" if vcd else "--no-vcd", str(out)],
+    done = subprocess.run([sys.executable, __file__, "--child", job, "vcd" if vcd else "no-vcd", str(out)],
                           capture_output=True, text=True, check=True)
     return dict(json.loads(done.stdout.splitlines()[-1]))
 
@@ -99,7 +99,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.child:
         job, vcd, out = args.child
-        print(json.dumps(child(job, vcd == "--vcd", Path(out))))
+        print(json.dumps(child(job, vcd == "vcd", Path(out))))
         return
     base = args.keep or Path(tempfile.mkdtemp(prefix="cosim-bench-memory-"))
     print(f"{'job':>6} {'VCD':>4} {'verdict':>7} {'peak RSS':>10} {'per sim. min':>12} {'CPU':>8} {'wall':>8} "

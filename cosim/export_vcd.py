@@ -192,16 +192,20 @@ def _sorted(t: Ints, v: Floats) -> tuple[Ints, Floats]:
 
 def _pulse_events(trace: Trace, name: str, width: int) -> Iterator[tuple[Ints, Floats]]:
     """Rises (1) at each pulse and falls (0) ``width`` later, in time order, a fall before a rise at
-    one tick; what lies at or after a chunk's last pulse waits for the next chunk."""
+    one tick; what lies at or after a piece's last pulse waits for the next piece. The pulses are
+    taken ``_BATCH`` at a time, so that what a suspended generator holds stays small."""
     held_t, held_v = np.empty(0, np.int64), np.empty(0)
-    for t, _ in trace.pulse_chunks(name):
-        times = np.concatenate([held_t, t + width, t])
-        values = np.concatenate([held_v, np.zeros(t.size), np.ones(t.size)])
-        order = np.argsort(times * 2 + values.astype(np.int64), kind="stable")  # three sorted runs
-        times, values = times[order], values[order]
-        cut = int(np.searchsorted(times, t[-1], side="left"))
-        yield times[:cut], values[:cut]
-        held_t, held_v = times[cut:], values[cut:]
+    for chunk, _ in trace.pulse_chunks(name):
+        for start in range(0, chunk.size, _BATCH):
+            t = chunk[start:start + _BATCH]
+            times = np.concatenate([held_t, t + width, t])
+            values = np.concatenate([held_v, np.zeros(t.size), np.ones(t.size)])
+            order = np.argsort(times * 2 + values.astype(np.int64), kind="stable")  # three sorted runs
+            times, values = times[order], values[order]
+            cut = int(np.searchsorted(times, t[-1], side="left"))
+            held_t, held_v = times[cut:], values[cut:]
+            del order
+            yield times[:cut], values[:cut]
     yield held_t, held_v
 
 
@@ -269,9 +273,9 @@ class _View:
     def _lines(self, t: Ints, k: Ints, v: Floats, *, timestamps: bool) -> bytes:
         """``#t`` lines where the time moves on, then ``<value><id>`` lines, made for all rows at once.
 
-        The short lines (timestamps, bits) are written as the rows of one byte matrix, group by group
-        of equal length, and taken out in order through a mask; the long ones (integers, reals) are
-        formatted one by one and put in between: Python work only for those.
+        The short lines (timestamps, bits) are the rows of one byte matrix, each right-aligned (so a
+        column is one digit place for every timestamp), taken out in order through a mask; the long
+        ones (integers, reals) are formatted one by one and put in between: Python work only for those.
         """
         n = t.size
         if not n:
@@ -286,33 +290,35 @@ class _View:
         long = kind != _BIT
         # the lines in order: a row's timestamp line (if any), then its change line
         change_at = np.arange(n) + np.cumsum(stamp)
-        is_long = np.zeros(n + int(stamp.sum()), dtype=bool)
+        is_long = np.zeros(n + int(np.count_nonzero(stamp)), dtype=bool)
         is_long[change_at[long]] = True
         short_at = np.cumsum(~is_long) - 1  # index of each line among the short ones
-        width = 21 if stamp.any() else 2 + int(self.id_len.max())
-        text = np.zeros((int((~is_long).sum()), max(width, 2 + int(self.id_len.max()))), dtype=np.uint8)
+        width = 21  # '#', up to 19 digits, newline; a bit line is shorter
+        text = np.zeros((is_long.size - int(np.count_nonzero(long)), width), dtype=np.uint8)
         length = np.zeros(text.shape[0], dtype=np.int64)
         rows = np.flatnonzero(stamp)
-        digits = np.maximum(np.searchsorted(_POW10, t[rows], side="right"), 1)
-        at = short_at[change_at[rows] - 1]
-        number = t[rows].astype(np.uint64)
-        for j in range(int(digits.max(initial=0))):  # digits right to left: a division by 10 is fast
-            number, digit = np.divmod(number, np.uint64(10))
-            place = digits - j
-            some = place >= 1
-            text[at[some], place[some]] = digit[some] + 48
-        text[at, 0] = 35  # '#'
-        text[at, 1 + digits] = 10
-        length[at] = digits + 2
+        if rows.size:
+            number = t[rows].astype(np.uint64)
+            digits = np.maximum(np.searchsorted(_POW10, t[rows], side="right"), 1)
+            lines = np.zeros((rows.size, width), dtype=np.uint8)
+            for j in range(int(digits.max())):  # right to left: a division by 10 is fast
+                number, digit = np.divmod(number, np.uint64(10))
+                lines[:, width - 2 - j] = digit + 48  # left of a shorter number: outside its line
+            lines[np.arange(rows.size), width - 2 - digits] = 35  # '#'
+            lines[:, width - 1] = 10
+            at = short_at[change_at[rows] - 1]
+            text[at] = lines
+            length[at] = digits + 2
         id_len = self.id_len[k]
-        for size in np.unique(id_len[~long]):
+        for size in range(int(id_len.min()), int(id_len.max()) + 1):
             these = np.flatnonzero(~long & (id_len == size))
-            at = short_at[change_at[these]]
-            text[at, 0] = 48 + (v[these] != 0)
-            text[at, 1:1 + size] = self.id_bytes[k[these], :size]
-            text[at, 1 + size] = 10
-            length[at] = size + 2
-        short = text[np.arange(text.shape[1]) < length[:, None]].tobytes()
+            if these.size:
+                at = short_at[change_at[these]]
+                text[at, width - 2 - size] = 48 + (v[these] != 0)
+                text[at, width - 1 - size:width - 1] = self.id_bytes[k[these], :size]
+                text[at, width - 1] = 10
+                length[at] = size + 2
+        short = text[np.arange(width) >= width - length[:, None]].tobytes()
         if not long.any():
             return short
         # the long lines, each after the short lines before it
