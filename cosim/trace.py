@@ -43,7 +43,7 @@ import numpy.typing as npt
 from cosim.errors import ConfigurationError
 from cosim.pulses import materialize_pulses
 from cosim.timebase import TimeBase
-from cosim.tracestore import SPILL_ROWS, Columns, Spool, merge_sorted
+from cosim.tracestore import SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
 
 Kind = Literal["bit", "int", "real", "pulse"]
 KINDS: tuple[str, ...] = ("bit", "int", "real", "pulse")
@@ -149,7 +149,10 @@ class Trace:
 
     def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int) -> None:
         """Record ``count`` pulses spread over ``[t0, t0+duration)`` (rule of :mod:`cosim.pulses`)."""
-        self.segment_recorder(name)(t0, duration, count, direction)
+        columns = self._pulses[name].segments
+        for column, value in zip(columns.arrays, (t0, duration, count, direction), strict=True):
+            column.append(value)
+        columns.appended()
 
     def recorder(self, name: str) -> Callable[[int, float], None]:
         """``record(t, value)`` for one declared value signal, bound once (for per-slot hot paths)."""
@@ -395,7 +398,7 @@ class Trace:
         yield from self._ordered_pulses(train)
 
     def _ordered_pulses(self, train: _PulseChannel) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
-        chunks = _segment_pulses(train.segments, self.chunk_pulses)
+        chunks = segment_pulses(train.segments, self.chunk_pulses)
         if not len(train.singles):
             yield from chunks
             return
@@ -467,26 +470,6 @@ class Trace:
     def extend_single_pulses(self, name: str, t: npt.ArrayLike, direction: npt.ArrayLike) -> None:
         """Append many pulses given one by one (see :meth:`record_pulse`)."""
         self._train(name).singles.extend((np.asarray(t, dtype=np.int64), np.asarray(direction, dtype=np.int64)))
-
-
-def _segment_pulses(segments: Columns, limit: int) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
-    """Pulses of time-ordered segments, chunk by chunk, at most ``limit`` at a time (long segments split)."""
-    for t0, duration, count, direction in segments.chunks():
-        ends = np.cumsum(count)
-        total = int(ends[-1]) if ends.size else 0
-        a = 0
-        while a < total:
-            b = min(a + limit, total)
-            i0 = int(np.searchsorted(ends, a, side="right"))
-            i1 = int(np.searchsorted(ends, b, side="left")) + 1
-            begins = ends[i0:i1] - count[i0:i1]
-            first = np.maximum(a - begins, 0)
-            stop = np.minimum(b - begins, count[i0:i1])
-            t = materialize_pulses(t0[i0:i1], duration[i0:i1], count[i0:i1], first=first, stop=stop)
-            d = np.repeat(direction[i0:i1], stop - first)
-            t.setflags(write=False)
-            yield t, d
-            a = b
 
 
 def _unknown(name: str, known: dict[str, SignalInfo]) -> str:

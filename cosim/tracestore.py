@@ -10,7 +10,9 @@ still in memory.
 :func:`merge_sorted` merges time-ordered chunk streams into one, in bounded memory (pulses of
 segments with single pulses; every signal of a VCD).
 
-A leaf like the trace: numpy only (pyarrow is imported when the first table spills).
+:func:`segment_pulses` materialises the pulses of time-ordered segments a bounded number at a time.
+
+A leaf like the trace: numpy and the pulse rule (pyarrow is imported when the first table spills).
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+
+from cosim.pulses import materialize_pulses
 
 Chunk = tuple[npt.NDArray[Any], ...]
 DTYPES = {"q": np.int64, "d": np.float64, "b": np.int8}
@@ -275,3 +279,23 @@ def _merged(parts: list[Chunk]) -> Chunk:
     joined = tuple(np.concatenate(cols) for cols in zip(*parts, strict=True))
     order = np.argsort(joined[0], kind="stable")
     return tuple(c[order] for c in joined)
+
+
+def segment_pulses(segments: Columns, limit: int) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
+    """Pulses of time-ordered segments, chunk by chunk, at most ``limit`` at a time (long segments split)."""
+    for t0, duration, count, direction in segments.chunks():
+        ends = np.cumsum(count)
+        total = int(ends[-1]) if ends.size else 0
+        a = 0
+        while a < total:
+            b = min(a + limit, total)
+            i0 = int(np.searchsorted(ends, a, side="right"))
+            i1 = int(np.searchsorted(ends, b, side="left")) + 1
+            begins = ends[i0:i1] - count[i0:i1]
+            first = np.maximum(a - begins, 0)
+            stop = np.minimum(b - begins, count[i0:i1])
+            t = materialize_pulses(t0[i0:i1], duration[i0:i1], count[i0:i1], first=first, stop=stop)
+            d = np.repeat(direction[i0:i1], stop - first)
+            t.setflags(write=False)
+            yield t, d
+            a = b
