@@ -162,3 +162,59 @@ def test_sigrok_sees_every_step_pulse(tmp_path: Path) -> None:
     rises = sum(1 for line in lines for change in line.split()[1:] if change == f"1{code}")
     assert rises == pulses > 100
     assert lines[-1] == "#40000000"
+
+
+def _shown(changes: list[tuple[int, object]], initial: object) -> list[tuple[int, object]]:
+    """What a viewer shows: the last value at each tick, only where it differs from the one before."""
+    last: dict[int, object] = {}
+    for t, value in changes:
+        last.pop(t, None)
+        last[t] = value
+    shown, current = [], initial
+    for t, value in last.items():
+        if value != current:
+            shown.append((t, value))
+            current = value
+    return shown
+
+
+def _expected(trace: Trace, name: str) -> list[tuple[int, object]]:
+    """A signal's VCD changes from the trace, one record or pulse at a time (the rules, written plainly)."""
+    info = trace.info[name]
+    if info.kind == "pulse":
+        times = trace.pulses(name)[0].tolist()
+        events = sorted([(t + info.pulse_width, 0) for t in times] + [(t, 1) for t in times])  # fall first
+        return _shown(events, 0)
+    t, v = trace.edges(name)
+    values: list[object] = [float(x) if info.kind == "real" else int(x) for x in v.tolist()]
+    return _shown(list(zip(t.tolist(), values, strict=True)), 0.0 if info.kind == "real" else 0)
+
+
+def _in_vcd(vcd: vcdvcd.VCDVCD, reference: str, kind: str) -> list[tuple[int, object]]:
+    def value(text: str) -> object:
+        if kind == "real":
+            return float(text)
+        number = int(text, 2)
+        return number - (1 << 64) if kind == "int" and number >= 1 << 63 else number
+
+    return _shown([(t, value(v)) for t, v in vcd[reference].tv], 0.0 if kind == "real" else 0)
+
+
+@pytest.mark.fmu
+@pytest.mark.parametrize(("scenario", "overrides"), [("pokeys_job", {"steppers": "false"}),
+                                                      ("trio_raster_starved", {})])
+def test_the_vcd_of_a_bundled_run_shows_every_record_and_pulse_of_its_trace(
+        scenario: str, overrides: dict[str, str], tmp_path: Path) -> None:
+    from cosim.export import read_trace
+    from cosim.runner import run_scenario
+    from cosim.scenario import load
+
+    result = run_scenario(load(scenario), overrides=overrides, out=tmp_path, formats=("vcd", "parquet"))
+    assert result.verdict == "PASS"
+    trace = read_trace(tmp_path)
+    vcd = vcdvcd.VCDVCD(str(tmp_path / "trace.vcd"))
+    for name, info in trace.info.items():
+        scopes, _, _ = name.rpartition(".")
+        reference = f"{scopes}.{name.replace('.', '_')}"
+        assert _in_vcd(vcd, reference, info.kind) == _expected(trace, name), name
+    assert vcd.endtime == trace.end_t
