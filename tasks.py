@@ -5,6 +5,7 @@ Usage::
 
     python3 tasks.py main       # set up, build the FMUs, run every bundled scenario, write the report
     python3 tasks.py test       # set up, build the FMUs, lint, type-check, build the docs, run the test suite
+                                #   (installs the Debian packages the tests use where missing: sigrok-cli)
     python3 tasks.py notebooks  # set up with JupyterLab, register the kernel, open the notebooks
                                 #   (--execute: run them all into results/notebooks/ instead)
     python3 tasks.py docs       # build the documentation site into site/ (--serve: live preview)
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -32,6 +34,8 @@ NOTEBOOK_STAMP = VENV / ".notebooks-stamp"
 BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
 PY = BIN / ("python.exe" if os.name == "nt" else "python")
 KERNEL = "cosim"
+#: Debian packages the test suite uses, by the command each provides (tests that need one skip without it).
+TEST_PACKAGES = {"sigrok-cli": "sigrok-cli"}
 
 
 def _say(text: str) -> None:
@@ -93,8 +97,31 @@ def main_job(args: list[str]) -> None:
     _run(BIN / "cosim", "main", *args)
 
 
+def ensure_debian_packages(packages: dict[str, str]) -> None:
+    """Install the Debian packages whose command is missing, quietly, where apt-get can (as root).
+
+    Elsewhere (no apt-get, not root, no network) say so and go on: the tests that need them skip.
+    """
+    missing = sorted({package for command, package in packages.items() if shutil.which(command) is None})
+    if not missing:
+        return
+    if shutil.which("apt-get") is None or not hasattr(os, "geteuid") or os.geteuid() != 0:
+        _say(f"not installing {', '.join(missing)} (needs apt-get as root): the tests that use them skip")
+        return
+    _say(f"installing {', '.join(missing)} (Debian packages the tests use)")
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env}
+    installed = subprocess.run(["apt-get", "install", "-y", "-q", "--no-install-recommends", *missing], **quiet)
+    if installed.returncode != 0:  # an old or missing package list: refresh it once and try again
+        subprocess.run(["apt-get", "update", "-q"], **quiet)
+        installed = subprocess.run(["apt-get", "install", "-y", "-q", "--no-install-recommends", *missing], **quiet)
+    if installed.returncode != 0:
+        _say(f"could not install {', '.join(missing)}: the tests that use them skip")
+
+
 def test_job(args: list[str]) -> None:
     ensure_venv()
+    ensure_debian_packages(TEST_PACKAGES)
     _say("building FMUs that are missing or older than their sources")
     _run(PY, "-m", "cosim.fmubuild", "--quiet")
     ensure_c_importer()

@@ -1,23 +1,34 @@
-"""Exports of a :class:`~cosim.trace.Trace`: VCD for waveform viewers, Parquet/CSV tables.
+"""Exports of a :class:`~cosim.trace.Trace`: waveforms for viewers, Parquet/CSV tables, a wide CSV.
 
-:func:`write_trace` writes a trace into a folder (``trace_meta.json``, ``trace.vcd`` and the
-tables); :func:`read_trace` reads the tables back into a :class:`~cosim.trace.Trace`. Both use
-only the trace's public methods.
+:func:`write_trace` writes a trace into a folder; :func:`read_trace` reads the tables back into a
+:class:`~cosim.trace.Trace`. Both use only the trace's public methods, and both go chunk by chunk:
+their memory does not grow with the length of the run.
 
-Tables (one file each, in the trace folder, ``.parquet`` or ``.csv``):
+What is written (``formats``):
+
+``trace_meta.json``     always: the resolution, the run's end and each signal's kind, unit and description
+``vcd``                 ``trace.vcd`` (every signal), ``trace_digital.vcd`` (bits and pulse trains only,
+                        for sigrok / PulseView) and ``trace.gtkw`` (a GTKWave view of ``trace.vcd``);
+                        see :mod:`cosim.export_vcd`
+``parquet`` / ``csv``   the four tables below, as ``<table>.parquet`` or ``<table>.csv``; ``csv`` also
+                        writes ``trace_wide.csv`` (one column per signal, time in seconds, for
+                        spreadsheets; see :mod:`cosim.export_wide`)
+
+Tables:
 
 ``edges``     signal, t, value (int64)       bit and int signals: every change
 ``values``    signal, t, value (float64)     real signals: every change or sample
 ``segments``  signal, t0, duration, count, dir   pulse-train segments (see :mod:`cosim.pulses`)
 ``pulses``    signal, t, dir                 pulses recorded one by one
 
-All ``t`` columns are integer ticks; ``trace_meta.json`` holds the resolution and each
-signal's kind, unit and description. In the VCD each pulse is drawn ``pulse_width`` ticks high.
+All ``t`` columns are integer ticks. Rows come signal by signal in declaration order, each
+signal's in recording order.
 """
 
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -25,11 +36,17 @@ import numpy as np
 import pandas as pd
 
 from cosim.errors import ConfigurationError
+from cosim.export_vcd import write_gtkw, write_vcd
+from cosim.export_wide import write_wide_csv
 from cosim.trace import Trace
 
 _TABLES = ("edges", "values", "segments", "pulses")
+_COLUMNS = {"edges": ("signal", "t", "value"), "values": ("signal", "t", "value"),
+            "segments": ("signal", "t0", "duration", "count", "dir"), "pulses": ("signal", "t", "dir")}
 FORMATS = ("vcd", "parquet", "csv")
 META = "trace_meta.json"
+#: Rows gathered before a Parquet row group (or a CSV block) is written.
+_BLOCK_ROWS = 1 << 17
 
 
 def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:
@@ -42,130 +59,122 @@ def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = 
     (folder / META).write_text(json.dumps(trace.header(), indent=1, default=str))
     for fmt in formats:
         if fmt == "vcd":
-            write_vcd(trace, folder / "trace.vcd")
+            write_vcd(trace, folder / "trace.vcd", digital=folder / "trace_digital.vcd")
+            write_gtkw(trace, folder / "trace.gtkw", vcd="trace.vcd")
         else:
             write_tables(trace, folder, fmt)
+            if fmt == "csv":
+                write_wide_csv(trace, folder / "trace_wide.csv")
     return folder
 
 
-def read_trace(folder: str | Path) -> Trace:
-    """Read a trace written by :func:`write_trace` (Parquet or CSV tables) back."""
+def read_trace(folder: str | Path, **options: Any) -> Trace:
+    """Read a trace written by :func:`write_trace` (Parquet or CSV tables) back.
+
+    ``options`` go to :class:`~cosim.trace.Trace` (``spill_rows``, ``spool``...).
+    """
     folder = Path(folder)
-    trace = Trace.from_header(json.loads((folder / META).read_text()))
+    trace = Trace.from_header(json.loads((folder / META).read_text()), **options)
     read_tables(trace, folder)
     return trace
 
 
-def write_vcd(trace: Trace, path: str | Path) -> Path:
-    """Write every signal of ``trace`` to a VCD file (timescale = the trace resolution)."""
-    from vcd import VCDWriter
-
-    path = Path(path)
-    times: list[np.ndarray] = []
-    var_ids: list[np.ndarray] = []
-    values: list[np.ndarray] = []
-    variables: list[Any] = []
-    with path.open("w") as stream, VCDWriter(stream, timescale=trace.timebase.unit,
-                                             comment="written by cosim", date="simulation",
-                                             check_values=False) as writer:
-        for name, info in trace.info.items():
-            scope, _, leaf = name.rpartition(".")
-            index = len(variables)
-            if info.kind == "pulse":
-                variables.append(writer.register_var(scope or "top", leaf, "wire", size=1, init=0))
-                t, _dirs = trace.pulses(name)
-                width = max(1, info.pulse_width)
-                t_all = np.concatenate([t, t + width])
-                v_all = np.concatenate([np.ones(t.size), np.zeros(t.size)])
-            else:
-                t_all, v_all = trace.edges(name)
-                if info.kind == "real":
-                    variables.append(writer.register_var(scope or "top", leaf, "real", init=0.0))
-                else:
-                    size = 1 if info.kind == "bit" else 64
-                    var_type = "wire" if info.kind == "bit" else "integer"
-                    variables.append(writer.register_var(scope or "top", leaf, var_type, size=size, init=0))
-            times.append(t_all)
-            var_ids.append(np.full(t_all.size, index, dtype=np.int64))
-            values.append(v_all.astype(np.float64))
-        if times:
-            t_cat = np.concatenate(times)
-            id_cat = np.concatenate(var_ids)
-            v_cat = np.concatenate(values)
-            # time order; at one instant a pulse's fall (0) before the next rise (1), then by signal
-            order = np.lexsort((id_cat, v_cat, t_cat))
-            kinds = [trace.info[n].kind for n in trace.info]
-            for t, i, v in zip(t_cat[order].tolist(), id_cat[order].tolist(), v_cat[order].tolist(),
-                               strict=True):
-                writer.change(variables[i], t, v if kinds[i] == "real" else int(v))
-    return path
-
-
-def _frames(trace: Trace) -> dict[str, pd.DataFrame]:
-    parts: dict[str, list[pd.DataFrame]] = {name: [] for name in _TABLES}
+def _rows(trace: Trace, table: str) -> Iterator[dict[str, Any]]:
+    """The rows of one table, chunk by chunk, as columns."""
     for name, info in trace.info.items():
         if info.kind == "pulse":
-            seg = trace.segments(name)
-            parts["segments"].append(pd.DataFrame({"signal": name, **seg}))
-            t_single, dir_single = trace.single_pulses(name)
-            if t_single.size:
-                parts["pulses"].append(pd.DataFrame({"signal": name, "t": t_single,
-                                                     "dir": dir_single.astype(np.int64)}))
+            if table == "segments":
+                for seg in trace.segment_chunks(name):
+                    yield {"signal": name, **seg}
+            elif table == "pulses":
+                for t, d in trace.single_pulse_chunks(name):
+                    yield {"signal": name, "t": t, "dir": d.astype(np.int64)}
+        elif table == ("values" if info.kind == "real" else "edges"):
+            for t, v in trace.edge_chunks(name):
+                yield {"signal": name, "t": t, "value": v if info.kind == "real" else v.astype(np.int64)}
+
+
+def _blocks(trace: Trace, table: str) -> Iterator[pd.DataFrame]:
+    """The rows of one table in frames of about ``_BLOCK_ROWS`` rows (at least one frame, maybe empty)."""
+    parts: list[pd.DataFrame] = []
+    size, emitted = 0, False
+    for columns in _rows(trace, table):
+        n = len(columns["t0" if table == "segments" else "t"])
+        if not n:
+            continue
+        parts.append(pd.DataFrame({k: np.full(n, v, dtype=object) if k == "signal" else v
+                                   for k, v in columns.items()}))
+        size += n
+        if size >= _BLOCK_ROWS:
+            yield _typed(pd.concat(parts, ignore_index=True), table)
+            parts, size, emitted = [], 0, True
+    if parts or not emitted:
+        yield _typed(pd.concat(parts, ignore_index=True) if parts else
+                     pd.DataFrame({c: [] for c in _COLUMNS[table]}), table)
+
+
+def _typed(frame: pd.DataFrame, table: str) -> pd.DataFrame:
+    for column in frame.columns:
+        if column == "signal":
+            frame[column] = frame[column].astype(str)
+        elif column == "value" and table == "values":
+            frame[column] = frame[column].astype(np.float64)
         else:
-            t, v = trace.edges(name)
-            table = "values" if info.kind == "real" else "edges"
-            value = v if info.kind == "real" else v.astype(np.int64)
-            parts[table].append(pd.DataFrame({"signal": name, "t": t, "value": value}))
-    empty: dict[str, dict[str, list[Any]]] = {
-        "edges": {"signal": [], "t": [], "value": []},
-        "values": {"signal": [], "t": [], "value": []},
-        "segments": {"signal": [], "t0": [], "duration": [], "count": [], "dir": []},
-        "pulses": {"signal": [], "t": [], "dir": []},
-    }
-    frames = {}
-    for table, dfs in parts.items():
-        if dfs:
-            frames[table] = pd.concat(dfs, ignore_index=True)
-        else:
-            frames[table] = pd.DataFrame(empty[table])
-        for column in frames[table].columns:
-            if column == "signal":
-                frames[table][column] = frames[table][column].astype(str)
-            elif column == "value" and table == "values":
-                frames[table][column] = frames[table][column].astype(np.float64)
-            else:
-                frames[table][column] = frames[table][column].astype(np.int64)
-    return frames
+            frame[column] = frame[column].astype(np.int64)
+    return frame
 
 
 def write_tables(trace: Trace, folder: str | Path, fmt: str = "parquet") -> list[Path]:
-    """Write the four tables as Parquet or CSV files into ``folder``."""
+    """Write the four tables as Parquet or CSV files into ``folder``, a block of rows at a time."""
     folder = Path(folder)
     written = []
-    for table, frame in _frames(trace).items():
+    for table in _TABLES:
         path = folder / f"{table}.{fmt}"
         if fmt == "parquet":
-            frame.to_parquet(path, index=False)
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+
+            writer = None
+            try:
+                for frame in _blocks(trace, table):
+                    batch = pa.Table.from_pandas(frame, preserve_index=False)
+                    if writer is None:
+                        writer = pq.ParquetWriter(path, batch.schema)
+                    writer.write_table(batch)
+            finally:
+                if writer is not None:
+                    writer.close()
         else:
-            frame.to_csv(path, index=False)
+            with path.open("w", newline="") as stream:
+                for k, frame in enumerate(_blocks(trace, table)):
+                    frame.to_csv(stream, index=False, header=k == 0)
         written.append(path)
     return written
 
 
 def read_tables(trace: Trace, folder: str | Path) -> None:
-    """Fill a freshly declared ``trace`` from the tables in ``folder`` (Parquet preferred)."""
+    """Fill a freshly declared ``trace`` from the tables in ``folder`` (Parquet preferred), a block at a time."""
     folder = Path(folder)
     fmt = "parquet" if (folder / "edges.parquet").exists() else "csv"
 
-    def read(table: str) -> pd.DataFrame:
+    def read(table: str) -> Iterator[pd.DataFrame]:
         path = folder / f"{table}.{fmt}"
-        return pd.read_parquet(path) if fmt == "parquet" else pd.read_csv(path)
+        if fmt == "csv":
+            yield from pd.read_csv(path, chunksize=_BLOCK_ROWS)
+            return
+        import pyarrow.parquet as pq
+
+        for batch in pq.ParquetFile(path).iter_batches(batch_size=_BLOCK_ROWS):
+            yield batch.to_pandas()
 
     for table in ("edges", "values"):
-        for name, group in read(table).groupby("signal", sort=False):
-            trace.extend(str(name), group["t"].to_numpy(np.int64), group["value"].to_numpy(np.float64))
-    for name, group in read("segments").groupby("signal", sort=False):
-        trace.extend_segments(str(name), group["t0"].to_numpy(np.int64), group["duration"].to_numpy(np.int64),
-                              group["count"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))
-    for name, group in read("pulses").groupby("signal", sort=False):
-        trace.extend_single_pulses(str(name), group["t"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))
+        for frame in read(table):
+            for name, group in frame.groupby("signal", sort=False):
+                trace.extend(str(name), group["t"].to_numpy(np.int64), group["value"].to_numpy(np.float64))
+    for frame in read("segments"):
+        for name, group in frame.groupby("signal", sort=False):
+            trace.extend_segments(str(name), group["t0"].to_numpy(np.int64), group["duration"].to_numpy(np.int64),
+                                  group["count"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))
+    for frame in read("pulses"):
+        for name, group in frame.groupby("signal", sort=False):
+            trace.extend_single_pulses(str(name), group["t"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))

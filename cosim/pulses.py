@@ -25,6 +25,8 @@ def materialize_pulses(
     seg_count: npt.ArrayLike,
     *,
     offset: npt.ArrayLike = 0,
+    first: npt.ArrayLike = 0,
+    stop: npt.ArrayLike | None = None,
 ) -> IntArray:
     """Exact pulse instants of many segments, vectorised (no Python loop).
 
@@ -38,6 +40,9 @@ def materialize_pulses(
         Pulses in each segment (>= 0).
     offset : int or array of int
         Offset of the first pulse from ``t0`` [ticks].
+    first, stop : int or array of int, optional
+        Only pulses ``k = first .. stop-1`` of each segment (default: all, ``0 .. count-1``), placed
+        as in the whole segment: for reading a long segment in pieces.
 
     Returns
     -------
@@ -48,6 +53,8 @@ def materialize_pulses(
     --------
     >>> materialize_pulses([0, 1000], [1000, 1000], [3, 2]).tolist()
     [0, 333, 666, 1000, 1500]
+    >>> materialize_pulses([0, 1000], [1000, 1000], [3, 2], first=[1, 0], stop=[3, 1]).tolist()
+    [333, 666, 1000]
     """
     t0 = np.asarray(seg_t0, dtype=np.int64)
     duration = np.asarray(seg_duration, dtype=np.int64)
@@ -55,11 +62,14 @@ def materialize_pulses(
     off = np.broadcast_to(np.asarray(offset, dtype=np.int64), t0.shape)
     if count.size and count.min() < 0:
         raise ValueError(f"seg_count has a negative value {int(count.min())} (allowed: >= 0)")
-    total = int(count.sum())
+    k_first = np.broadcast_to(np.asarray(first, dtype=np.int64), t0.shape)
+    k_stop = count if stop is None else np.broadcast_to(np.asarray(stop, dtype=np.int64), t0.shape)
+    taken = k_stop - k_first
+    total = int(taken.sum())
     if total == 0:
         return np.empty(0, dtype=np.int64)
-    seg_index = np.repeat(np.arange(count.size), count)
-    starts = np.cumsum(count) - count
-    k = np.arange(total, dtype=np.int64) - np.repeat(starts, count)
+    seg_index = np.repeat(np.arange(count.size), taken)
+    starts = np.cumsum(taken) - taken
+    k = np.arange(total, dtype=np.int64) - np.repeat(starts - k_first, taken)
     c = count[seg_index]
     return t0[seg_index] + off[seg_index] + (k * duration[seg_index]) // c

@@ -4,9 +4,13 @@
 recipe, runs it, evaluates every declared check on the trace and writes the results folder:
 
 ``result.json``        scenario, parameter values used, seed, each check, figures, verdict
-``trace.vcd``          every signal, for GTKWave and other waveform viewers
-``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv``
+``trace.vcd``          every signal, for GTKWave and other waveform viewers; ``trace.gtkw`` opens it in
+                       GTKWave; ``trace_digital.vcd`` holds the bits and pulse trains for sigrok/PulseView
+``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv`` and ``trace_wide.csv``
 ``trace_meta.json``    resolution and each signal's kind, unit and description
+
+A long run keeps its trace on disk as it goes (in a temporary folder inside the results folder,
+removed when the results are written): see :mod:`cosim.trace`.
 
 The trace is written even when the run fails half-way (nothing recorded is lost), and the
 result then carries the error. A plant FMU that asks to end the simulation
@@ -179,6 +183,8 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     with Simulation(seed=seed, timebase=TimeBase(scenario.resolution_for(values))) as sim:
         end = _end_time(sim, until if until is not None else scenario.until_for(values))
         staged = OutputFolder(out) if out is not None else None  # refused or unwritable: before the run
+        if staged is not None:
+            sim.trace.spool_dir = staged.staging  # a long run spills its trace beside its results, not to /tmp
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
         run = Run(sim=sim, p=Values(values), until=end)
@@ -216,9 +222,13 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         result.notes = list(run.notes)
         if result.error is None:
             _evaluate(run, result, scenario)
+        try:
+            if staged is not None:
+                write_trace(sim.trace, staged.staging, formats=formats)
+                (staged.staging / "result.json").write_text(to_json(result.to_dict()))
+        finally:
+            sim.trace.discard_spill()
         if staged is not None:
-            write_trace(sim.trace, staged.staging, formats=formats)
-            (staged.staging / "result.json").write_text(to_json(result.to_dict()))
             result.out = staged.commit()
     return result
 

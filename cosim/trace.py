@@ -5,8 +5,9 @@ Signal names follow one scheme, the same in the Python API, VCD, Parquet and CSV
     <device>.<axis>.<signal>      e.g. pokeys.x.step, trio.axis3.gate, pmac.cs1.timebase
     <device>.<signal>             for devices without axes, e.g. laser.power, pokeys.buffer_level
 
-lower case, dot-separated, each part ``[a-z0-9_]``. In a waveform viewer the dots are scopes,
-so ``trio.axis3.gate`` appears as signal ``gate`` in scope ``trio`` > ``axis3``.
+lower case, dot-separated, each part ``[a-z0-9_]``. In a waveform viewer the dots are scopes
+(``trio`` > ``axis3``) and the signal is named by its whole path (``trio_axis3_gate``, see
+:mod:`cosim.export_vcd`).
 
 Kinds of record (all times are integer ticks of the trace's resolution):
 
@@ -15,19 +16,26 @@ Kinds of record (all times are integer ticks of the trace's resolution):
 * ``pulse`` trains: segments ``(t0, duration, count, dir)`` placed by the rule of
   :mod:`cosim.pulses`, plus any pulses given one by one; :meth:`Trace.pulses` materialises them.
 
-The trace is a leaf: it imports nothing of cosim but the pulse rule, the time base and the
-errors. Exports (:mod:`cosim.export`: VCD, Parquet/CSV, the ``trace_meta.json`` header) read and
-fill it through its public methods only.
+Memory: each table (a signal's records, a train's segments, its single pulses) keeps at most
+``spill_rows`` rows in memory; beyond that the rows go to disk in chunks as the run goes (see
+:mod:`cosim.tracestore`), so a long run's memory does not grow with simulated time. Readers that
+must stay bounded go chunk by chunk (:meth:`Trace.edge_chunks`, :meth:`Trace.pulse_chunks`,
+:meth:`Trace.segment_chunks`); the whole-array readers (:meth:`Trace.edges`, :meth:`Trace.pulses`)
+are there for short runs, notebooks and tests.
+
+The trace is a leaf: it imports nothing of cosim but the pulse rule, the time base, the errors
+and its own store. Exports (:mod:`cosim.export`: VCD, Parquet/CSV, the ``trace_meta.json``
+header) read and fill it through its public methods only.
 """
 
 from __future__ import annotations
 
 import re
-from array import array
-from collections.abc import Callable, Mapping
-from dataclasses import asdict, dataclass, field
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import asdict, dataclass
 from fractions import Fraction
-from typing import Any, Literal
+from pathlib import Path
+from typing import Any, Literal, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -35,10 +43,19 @@ import numpy.typing as npt
 from cosim.errors import ConfigurationError
 from cosim.pulses import materialize_pulses
 from cosim.timebase import TimeBase
+from cosim.tracestore import SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
 
 Kind = Literal["bit", "int", "real", "pulse"]
 KINDS: tuple[str, ...] = ("bit", "int", "real", "pulse")
 _NAME = re.compile(r"^[a-z][a-z0-9_]*(\.[a-z0-9_]+)*$")
+Ints = npt.NDArray[np.int64]
+Floats = npt.NDArray[np.float64]
+Int8s = npt.NDArray[np.int8]
+#: Most pulses in one chunk of :meth:`Trace.pulse_chunks` (about 2.3 MiB of ``t, dir``).
+CHUNK_PULSES = 1 << 18
+_VALUE_FIELDS = (("t", "q"), ("v", "d"))
+_SEGMENT_FIELDS = (("t0", "q"), ("duration", "q"), ("count", "q"), ("dir", "b"))
+_SINGLE_FIELDS = (("t", "q"), ("dir", "b"))
 
 
 @dataclass(frozen=True)
@@ -63,19 +80,9 @@ class SignalInfo:
 
 
 @dataclass
-class _Channel:
-    t: array = field(default_factory=lambda: array("q"))
-    v: array = field(default_factory=lambda: array("d"))
-
-
-@dataclass
 class _PulseChannel:
-    t0: array = field(default_factory=lambda: array("q"))
-    duration: array = field(default_factory=lambda: array("q"))
-    count: array = field(default_factory=lambda: array("q"))
-    direction: array = field(default_factory=lambda: array("b"))
-    single_t: array = field(default_factory=lambda: array("q"))
-    single_dir: array = field(default_factory=lambda: array("b"))
+    segments: Columns
+    singles: Columns
 
 
 class Trace:
@@ -85,12 +92,24 @@ class Trace:
     ----------
     timebase : TimeBase
         Resolution of the recorded times.
+    spill_rows : int
+        Rows of one table kept in memory; more go to disk in chunks of this size (default 65,536:
+        about 1 MiB per signal). A run shorter than that never touches the disk.
+    chunk_pulses : int
+        Most pulses materialised at once by :meth:`pulse_chunks` (default 262,144).
+    spool : path, optional
+        Folder in which to make the spill folder (default: the system's temporary folder); see
+        :attr:`spool_dir`.
     """
 
-    def __init__(self, timebase: TimeBase | None = None) -> None:
+    def __init__(self, timebase: TimeBase | None = None, *, spill_rows: int = SPILL_ROWS,
+                 chunk_pulses: int = CHUNK_PULSES, spool: str | Path | None = None) -> None:
         self.timebase = timebase or TimeBase()
         self.info: dict[str, SignalInfo] = {}
-        self._values: dict[str, _Channel] = {}
+        self.spill_rows = int(spill_rows)
+        self.chunk_pulses = max(1, int(chunk_pulses))
+        self._spool = Spool(spool)
+        self._values: dict[str, Columns] = {}
         self._pulses: dict[str, _PulseChannel] = {}
         self._pulse_cache: dict[str, tuple[tuple[int, int], npt.NDArray[np.int64], npt.NDArray[np.int8]]] = {}
         self.end_t = 0
@@ -110,78 +129,141 @@ class Trace:
         if name in self.info:
             raise ConfigurationError(f"signal {name!r} is declared twice")
         self.info[name] = SignalInfo(kind, unit, description, pulse_width)
+        key = f"{len(self.info):04d}-{name}"
         if kind == "pulse":
-            self._pulses[name] = _PulseChannel()
+            self._pulses[name] = _PulseChannel(
+                Columns(_SEGMENT_FIELDS, spool=self._spool, key=key + ".segments", limit=self.spill_rows,
+                        segments=True),
+                Columns(_SINGLE_FIELDS, spool=self._spool, key=key + ".pulses", limit=self.spill_rows))
         else:
-            self._values[name] = _Channel()
+            self._values[name] = Columns(_VALUE_FIELDS, spool=self._spool, key=key, limit=self.spill_rows)
 
     def record(self, name: str, t: int, value: float) -> None:
         """Record a value change (bit/int/real) or a sample (real) at tick ``t``."""
-        channel = self._values[name]
-        channel.t.append(t)
-        channel.v.append(value)
+        columns = self._values[name]
+        t_column, v_column = columns.arrays
+        t_column.append(t)
+        v_column.append(value)
+        if len(t_column) >= columns.limit:
+            columns.spill()
 
     def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int) -> None:
         """Record ``count`` pulses spread over ``[t0, t0+duration)`` (rule of :mod:`cosim.pulses`)."""
-        channel = self._pulses[name]
-        channel.t0.append(t0)
-        channel.duration.append(duration)
-        channel.count.append(count)
-        channel.direction.append(direction)
+        columns = self._pulses[name].segments
+        for column, value in zip(columns.arrays, (t0, duration, count, direction), strict=True):
+            column.append(value)
+        columns.appended()
 
     def recorder(self, name: str) -> Callable[[int, float], None]:
         """``record(t, value)`` for one declared value signal, bound once (for per-slot hot paths)."""
-        channel = self._values[name]
-        t_append, v_append = channel.t.append, channel.v.append
+        columns = self._values[name]
+        t_column, v_column = columns.arrays
+        t_append, v_append, limit, spill = t_column.append, v_column.append, columns.limit, columns.spill
 
         def record(t: int, value: float) -> None:
             t_append(t)
             v_append(value)
+            if len(t_column) >= limit:
+                spill()
 
         return record
 
     def segment_recorder(self, name: str) -> Callable[[int, int, int, int], None]:
         """``record_segment(t0, duration, count, direction)`` for one declared pulse train, bound once."""
-        channel = self._pulses[name]
-        appends = (channel.t0.append, channel.duration.append, channel.count.append, channel.direction.append)
-        t0_append, duration_append, count_append, direction_append = appends
+        columns = self._pulses[name].segments
+        t0_column = columns.arrays[0]
+        t0_append, duration_append, count_append, direction_append = (a.append for a in columns.arrays)
+        limit, spill = columns.limit, columns.spill
 
         def record(t0: int, duration: int, count: int, direction: int) -> None:
             t0_append(t0)
             duration_append(duration)
             count_append(count)
             direction_append(direction)
+            if len(t0_column) >= limit:
+                spill()
 
         return record
 
     def record_pulse(self, name: str, t: int, direction: int) -> None:
         """Record one pulse at tick ``t`` (for trains that are not evenly spread)."""
-        channel = self._pulses[name]
-        channel.single_t.append(t)
-        channel.single_dir.append(direction)
+        columns = self._pulses[name].singles
+        t_column, d_column = columns.arrays
+        t_column.append(t)
+        d_column.append(direction)
+        if len(t_column) >= columns.limit:
+            columns.spill()
+
+    # -- memory -------------------------------------------------------------------------------
+    @property
+    def spool_dir(self) -> Path | None:
+        """Folder in which the spill folder is made (None: the system's temporary folder).
+
+        Set it before the run spills anything; the runner sets it to the results folder.
+        """
+        return None if self._spool.parent is None else Path(self._spool.parent)
+
+    @spool_dir.setter
+    def spool_dir(self, folder: str | Path | None) -> None:
+        if self._spool.used:
+            raise ConfigurationError("the trace has spilled already: set spool_dir before the run")
+        self._spool.parent = folder
+
+    def memory_rows(self) -> int:
+        """Rows held in memory over every table (at most ``spill_rows`` per table)."""
+        tables = [*self._values.values(), *(t for ch in self._pulses.values() for t in (ch.segments, ch.singles))]
+        return sum(t.in_memory for t in tables)
+
+    def spilled_rows(self) -> int:
+        """Rows written to disk so far."""
+        tables = [*self._values.values(), *(t for ch in self._pulses.values() for t in (ch.segments, ch.singles))]
+        return sum(t.spilled for t in tables)
+
+    def discard_spill(self) -> None:
+        """Delete the spilled chunks now (the trace can no longer be read: call it when done)."""
+        self._spool.remove()
 
     # -- reading ----------------------------------------------------------------------------
     def names(self, kind: str | None = None) -> list[str]:
         """Declared signal names (optionally of one kind), in declaration order."""
         return [n for n, i in self.info.items() if kind is None or i.kind == kind]
 
-    def _channel(self, name: str) -> _Channel:
+    def _columns(self, name: str) -> Columns:
         if name not in self._values:
             raise KeyError(_unknown(name, self.info))
         return self._values[name]
 
+    def _train(self, name: str) -> _PulseChannel:
+        if name not in self._pulses:
+            raise KeyError(_unknown(name, self.info))
+        return self._pulses[name]
+
+    def edge_chunks(self, name: str) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]]:
+        """``(t, value)`` of a bit/int/real signal chunk by chunk, in recording order (at most
+        ``spill_rows`` records at a time): :meth:`edges` in bounded memory."""
+        return cast("Iterator[tuple[Ints, Floats]]", self._columns(name).chunks())
+
+    def in_time_order(self, name: str) -> bool:
+        """Are the records of a signal (or the pulses of a train: segments and single pulses each) in
+        time order? Recorders append in time order; a reader of :meth:`edge_chunks` relies on it."""
+        if name in self._pulses:
+            train = self._pulses[name]
+            return train.segments.in_order() and train.singles.in_order()
+        return self._columns(name).in_order()
+
     def edges(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
         """``(t, value)`` of a bit/int/real signal: its changes (or samples) in time order."""
-        channel = self._channel(name)
-        return np.frombuffer(channel.t, dtype=np.int64).copy(), np.frombuffer(channel.v).copy()
+        parts = list(self.edge_chunks(name))
+        if len(parts) == 1 and parts[0][0].flags.writeable:
+            return parts[0]
+        return (np.concatenate([p[0] for p in parts]) if parts else np.empty(0, np.int64),
+                np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.float64))
 
     samples = edges
 
     def value_at(self, name: str, t: int) -> float:
         """Value of a piecewise-constant signal at tick ``t`` (NaN before its first record)."""
-        times, values = self.edges(name)
-        i = int(np.searchsorted(times, t, side="right")) - 1
-        return float(values[i]) if i >= 0 else float("nan")
+        return float(self.values_at(name, [t])[0])
 
     def drop_pulse_cache(self) -> None:
         """Forget the materialised pulse arrays kept by :meth:`pulses` (to free memory, or to time it)."""
@@ -201,9 +283,13 @@ class Trace:
         >>> trace.values_at("dev.axis1.mode", [0, 100, 249, 250, 900]).tolist()
         [nan, 1.0, 1.0, 2.0, 2.0]
         """
-        times, values = self.edges(name)
-        i = np.searchsorted(times, np.asarray(t, dtype=np.int64), side="right") - 1
-        return np.where(i >= 0, values[np.maximum(i, 0)] if values.size else np.nan, np.nan)
+        query = np.asarray(t, dtype=np.int64)
+        out = np.full(query.shape, np.nan)
+        for times, values in self.edge_chunks(name):  # in time order: a later chunk overrides
+            i = np.searchsorted(times, query, side="right") - 1
+            held = i >= 0
+            out[held] = values[i[held]]
+        return out
 
     def positions_at(self, name: str, t: npt.ArrayLike) -> npt.NDArray[np.int64]:
         """Signed pulse count of a pulse train up to and including each tick of ``t`` (dir 1 counts up).
@@ -220,9 +306,12 @@ class Trace:
         >>> trace.positions_at("dev.x.step", [-1, 0, 600, 999, 1000, 2000]).tolist()
         [0, 1, 3, 4, 3, 2]
         """
-        times, direction = self.pulses(name)
-        position = np.concatenate(([0], np.cumsum(np.where(direction == 1, 1, -1), dtype=np.int64)))
-        return position[np.searchsorted(times, np.asarray(t, dtype=np.int64), side="right")]
+        query = np.asarray(t, dtype=np.int64)
+        out = np.zeros(query.shape, dtype=np.int64)
+        for times, direction in self.pulse_chunks(name):
+            position = np.concatenate(([0], np.cumsum(np.where(direction == 1, 1, -1), dtype=np.int64)))
+            out += position[np.searchsorted(times, query, side="right")]
+        return out
 
     def pulses_per_window(self, name: str, window: int, *, start: int = 0,
                           end: int | None = None) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
@@ -245,57 +334,102 @@ class Trace:
             Counts of both directions; divide by ``window`` for a rate.
         """
         window = self.timebase.check_ticks(window, name="window", minimum=1)
-        times, _ = self.pulses(name)
-        last = max(self.end_t, int(times[-1]) + 1 if times.size else 0) if end is None else end
+        last = end
+        if last is None:
+            last = self.end_t
+            for times, _ in self.pulse_chunks(name):
+                last = max(last, int(times[-1]) + 1)
         n = max(-(-(last - start) // window), 0)
-        inside = times[(times >= start) & (times < min(last, start + n * window))]
-        counts = np.bincount((inside - start) // window, minlength=n).astype(np.int64)
+        counts = np.zeros(n, dtype=np.int64)
+        stop = min(last, start + n * window)
+        for times, _ in self.pulse_chunks(name):
+            inside = times[(times >= start) & (times < stop)]
+            if inside.size:
+                k = (inside - start) // window
+                low = int(k[0]) if bool(np.all(k[1:] >= k[:-1])) else int(k.min())
+                part = np.bincount(k - low)
+                counts[low:low + part.size] += part
         return start + window * np.arange(n, dtype=np.int64), counts
+
+    def segment_chunks(self, name: str) -> Iterator[dict[str, npt.NDArray[np.int64]]]:
+        """Raw pulse segments of a pulse train chunk by chunk: :meth:`segments` in bounded memory."""
+        for t0, duration, count, direction in self._train(name).segments.chunks():
+            yield {"t0": t0, "duration": duration, "count": count, "dir": direction.astype(np.int64)}
 
     def segments(self, name: str) -> dict[str, npt.NDArray[np.int64]]:
         """Raw pulse segments of a pulse train: arrays ``t0, duration, count, dir``."""
-        if name not in self._pulses:
-            raise KeyError(_unknown(name, self.info))
-        ch = self._pulses[name]
-        return {
-            "t0": np.frombuffer(ch.t0, dtype=np.int64).copy(),
-            "duration": np.frombuffer(ch.duration, dtype=np.int64).copy(),
-            "count": np.frombuffer(ch.count, dtype=np.int64).copy(),
-            "dir": np.frombuffer(ch.direction, dtype=np.int8).astype(np.int64),
-        }
+        parts = list(self.segment_chunks(name))
+        keys = ("t0", "duration", "count", "dir")
+        return {k: np.concatenate([p[k] for p in parts]) if parts else np.empty(0, np.int64) for k in keys}
+
+    def single_pulse_chunks(self, name: str) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
+        """``(t, dir)`` of the pulses recorded one by one, chunk by chunk, in recording order."""
+        return cast("Iterator[tuple[Ints, Int8s]]", self._train(name).singles.chunks())
+
+    def single_pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
+        """``(t, dir)`` of the pulses of a pulse train that were recorded one by one (not as segments)."""
+        parts = list(self.single_pulse_chunks(name))
+        if not parts:
+            return np.empty(0, np.int64), np.empty(0, np.int8)
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+    def pulse_chunks(self, name: str) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
+        """``(t, dir)`` of every pulse of a pulse train in time order, at most ``chunk_pulses`` at a time.
+
+        What :meth:`pulses` gives, in bounded memory: a train held in memory and small enough comes
+        as the one (kept) array of :meth:`pulses`; a longer one is materialised chunk by chunk from
+        its segments, merged with its single pulses. A train whose records are not in time order
+        (segments given out of order) is materialised whole and sorted, as :meth:`pulses` does.
+        The arrays are read-only.
+        """
+        train = self._train(name)
+        segments, singles = train.segments, train.singles
+        if not segments.spilled and not singles.spilled:
+            total = int(np.frombuffer(segments.arrays[2], dtype=np.int64).sum()) + len(singles)
+            if total <= self.chunk_pulses:
+                if total:
+                    yield self.pulses(name)
+                return
+        if not (segments.in_order() and singles.in_order()):
+            t, d = self.pulses(name)
+            for k in range(0, t.size, self.chunk_pulses):
+                yield t[k:k + self.chunk_pulses], d[k:k + self.chunk_pulses]
+            return
+        yield from self._ordered_pulses(train)
+
+    def _ordered_pulses(self, train: _PulseChannel) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
+        chunks = segment_pulses(train.segments, self.chunk_pulses)
+        if not len(train.singles):
+            yield from chunks
+            return
+        yield from cast("Iterator[tuple[Ints, Int8s]]", merge_sorted([chunks, train.singles.chunks()]))
 
     def pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
         """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order.
 
         The arrays are read-only and kept until the train records more pulses, so several checks
-        of one train materialise it once.
+        of one train materialise it once. For long trains prefer :meth:`pulse_chunks`.
         """
-        if name not in self._pulses:
-            raise KeyError(_unknown(name, self.info))
-        ch = self._pulses[name]
-        version = (len(ch.t0), len(ch.single_t))
+        train = self._train(name)
+        version = (len(train.segments), len(train.singles))
         cached = self._pulse_cache.get(name)
         if cached is not None and cached[0] == version:
             return cached[1], cached[2]
-        seg = self.segments(name)
-        t = materialize_pulses(seg["t0"], seg["duration"], seg["count"])
-        d = np.repeat(seg["dir"].astype(np.int8), seg["count"])
-        if len(ch.single_t):
-            t = np.concatenate([t, np.frombuffer(ch.single_t, dtype=np.int64)])
-            d = np.concatenate([d, np.frombuffer(ch.single_dir, dtype=np.int8)])
-        order = np.argsort(t, kind="stable")
-        t, d = t[order], d[order]
+        if train.segments.in_order() and train.singles.in_order():
+            parts = list(self._ordered_pulses(train))
+            t = np.concatenate([p[0] for p in parts]) if parts else np.empty(0, np.int64)
+            d = np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.int8)
+        else:
+            seg = self.segments(name)
+            t = materialize_pulses(seg["t0"], seg["duration"], seg["count"])
+            d = np.repeat(seg["dir"].astype(np.int8), seg["count"])
+            t_single, d_single = self.single_pulses(name)
+            order = np.argsort(np.concatenate([t, t_single]), kind="stable")
+            t, d = np.concatenate([t, t_single])[order], np.concatenate([d, d_single])[order]
         t.setflags(write=False)
         d.setflags(write=False)
         self._pulse_cache[name] = (version, t, d)
         return t, d
-
-    def single_pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
-        """``(t, dir)`` of the pulses of a pulse train that were recorded one by one (not as segments)."""
-        if name not in self._pulses:
-            raise KeyError(_unknown(name, self.info))
-        ch = self._pulses[name]
-        return np.frombuffer(ch.single_t, dtype=np.int64).copy(), np.frombuffer(ch.single_dir, dtype=np.int8).copy()
 
     # -- header and bulk filling (for readers of stored traces) --------------------------------
     def header(self) -> dict[str, Any]:
@@ -309,10 +443,13 @@ class Trace:
         }
 
     @classmethod
-    def from_header(cls, header: Mapping[str, Any]) -> Trace:
-        """An empty trace with the resolution, end, signals and metadata of :meth:`header`."""
+    def from_header(cls, header: Mapping[str, Any], **options: Any) -> Trace:
+        """An empty trace with the resolution, end, signals and metadata of :meth:`header`.
+
+        ``options`` go to the constructor (``spill_rows``, ``spool``...).
+        """
         num, den = header["resolution_s"]
-        trace = cls(TimeBase(Fraction(num, den)))
+        trace = cls(TimeBase(Fraction(num, den)), **options)
         trace.end_t = int(header["end_t"])
         trace.meta = dict(header.get("meta", {}))
         for name, info in header["signals"].items():
@@ -322,28 +459,17 @@ class Trace:
 
     def extend(self, name: str, t: npt.ArrayLike, value: npt.ArrayLike) -> None:
         """Append many records ``(t, value)`` of a bit/int/real signal at once (in time order)."""
-        channel = self._channel(name)
-        channel.t.extend(np.asarray(t, dtype=np.int64).tolist())
-        channel.v.extend(np.asarray(value, dtype=np.float64).tolist())
+        self._columns(name).extend((np.asarray(t, dtype=np.int64), np.asarray(value, dtype=np.float64)))
 
     def extend_segments(self, name: str, t0: npt.ArrayLike, duration: npt.ArrayLike, count: npt.ArrayLike,
                         direction: npt.ArrayLike) -> None:
         """Append many segments of a pulse train at once (see :meth:`record_segment`)."""
-        if name not in self._pulses:
-            raise KeyError(_unknown(name, self.info))
-        ch = self._pulses[name]
-        ch.t0.extend(np.asarray(t0, dtype=np.int64).tolist())
-        ch.duration.extend(np.asarray(duration, dtype=np.int64).tolist())
-        ch.count.extend(np.asarray(count, dtype=np.int64).tolist())
-        ch.direction.extend(np.asarray(direction, dtype=np.int64).tolist())
+        self._train(name).segments.extend(tuple(np.asarray(c, dtype=np.int64)
+                                                for c in (t0, duration, count, direction)))
 
     def extend_single_pulses(self, name: str, t: npt.ArrayLike, direction: npt.ArrayLike) -> None:
         """Append many pulses given one by one (see :meth:`record_pulse`)."""
-        if name not in self._pulses:
-            raise KeyError(_unknown(name, self.info))
-        ch = self._pulses[name]
-        ch.single_t.extend(np.asarray(t, dtype=np.int64).tolist())
-        ch.single_dir.extend(np.asarray(direction, dtype=np.int64).tolist())
+        self._train(name).singles.extend((np.asarray(t, dtype=np.int64), np.asarray(direction, dtype=np.int64)))
 
 
 def _unknown(name: str, known: dict[str, SignalInfo]) -> str:

@@ -25,8 +25,8 @@ def test_runs_and_writes_json_vcd_and_tables(tmp_path: Path, capsys: pytest.Capt
     assert status == 0
     assert result["verdict"] == "PASS" and result["summary"] == {"checks": 3, "passed": 3, "failed": 0}
     assert "PASS  energy equals the closed form (1e-9 relative)" in capsys.readouterr().out
-    assert {p.name for p in (tmp_path / "out").iterdir()} >= {"result.json", "trace.vcd", "edges.parquet",
-                                                              "values.parquet"}
+    assert {p.name for p in (tmp_path / "out").iterdir()} >= {"result.json", "trace.vcd", "trace_digital.vcd",
+                                                              "trace.gtkw", "edges.parquet", "values.parquet"}
     vcd = vcdvcd.VCDVCD(str(tmp_path / "out" / "trace.vcd"))
     gate = next(s for s in vcd.signals if s.endswith("gate"))
     assert [t for t, v in vcd[gate].tv if v == "1"] == [100_000, 3_100_000]  # ns: 0.1 ms and 0.1 + 2 + 1 ms

@@ -125,16 +125,18 @@ def test_vcd_reads_back_with_an_independent_parser(sim: Simulation, tmp_path: Pa
     write_trace(sim.trace, tmp_path, formats=("vcd",))
     vcd = vcdvcd.VCDVCD(str(tmp_path / "trace.vcd"))
     assert vcd.timescale["unit"] == "ns" and vcd.timescale["magnitude"] == 1
-    gate = vcd["dev.axis1.gate"]
+    # scopes from the dotted path, the signal named by its whole path
+    gate = vcd["dev.axis1.dev_axis1_gate"]
     assert [(t, v) for t, v in gate.tv] == [(0, "0"), (1000, "1"), (2000, "0")]
-    count = vcd["dev.axis1.count"]
+    count = vcd["dev.axis1.dev_axis1_count"]
     assert [(t, int(v, 2)) for t, v in count.tv] == [(0, 0), (1000, 7), (2000, 9)]
-    step = vcd["dev.axis1.step"]
+    step = vcd["dev.axis1.dev_axis1_step"]
     rises = [t for t, v in step.tv if v == "1"]
     falls = [t for t, v in step.tv if v == "0" and t > 0]
     assert rises == [1000, 1333, 1666, 2000, 2500]
     assert falls == [1100, 1433, 1766, 2100, 2600]
-    assert float(vcd["dev.power"].tv[-1][1]) == 12.5
+    assert float(vcd["dev.dev_power"].tv[-1][1]) == 12.5
+    assert vcd.endtime == 3000  # the run's end, not the last change (2600)
 
 
 def test_same_scenario_twice_gives_bit_identical_exports(tmp_path: Path) -> None:

@@ -7,6 +7,7 @@ and durations in ns (see :class:`Clock`).
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING
@@ -138,10 +139,17 @@ def _require_kind(trace: Trace, name: str, kinds: tuple[str, ...], check: Check)
         )
 
 
-def pulse_times(trace: Trace, name: str, check: Check) -> tuple[Ints, npt.NDArray[np.int8]]:
-    """``(t, dir)`` of every pulse of a pulse train (an unknown name raises KeyError)."""
+def pulse_chunks(trace: Trace, name: str, check: Check) -> Iterator[tuple[Ints, npt.NDArray[np.int8]]]:
+    """``(t, dir)`` of every pulse of a pulse train, in time order, chunk by chunk (an unknown name
+    raises KeyError when read)."""
     _require_kind(trace, name, ("pulse",), check)
-    return trace.pulses(name)
+    return trace.pulse_chunks(name)
+
+
+def record_chunks(trace: Trace, name: str, check: Check) -> Iterator[tuple[Ints, Floats]]:
+    """``(t, value)`` of a bit/int/real signal, every record in time order, chunk by chunk."""
+    _require_kind(trace, name, VALUE_KINDS, check)
+    return trace.edge_chunks(name)
 
 
 def records(trace: Trace, name: str, check: Check) -> tuple[Ints, Floats]:

@@ -13,18 +13,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cosim import validate
-from cosim.checks.base import (
-    TICKS,
-    Check,
-    Clock,
-    Findings,
-    changes,
-    fmt,
-    held_index,
-    pulse_times,
-    records,
-)
+from cosim.checks.base import TICKS, Check, Clock, Findings, fmt, pulse_chunks, record_chunks
 from cosim.checks.result import MAX_REPORTED, Violation
+from cosim.tracecursor import Held
 
 if TYPE_CHECKING:
     from cosim.trace import Trace
@@ -75,43 +66,50 @@ class DirectionSetup(Check):
         return self.step
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t, d = pulse_times(trace, self.step, self)
-        te, ve = records(trace, self.direction, self)
-        level_at = held_index(te, t)
-        undefined = level_at < 0
-        level = (ve[np.maximum(level_at, 0)] != 0).astype(np.int8)
-        wanted = level if self.positive_level == 1 else 1 - level  # the pulse dir this level means
-        mismatch = ~undefined & (d != wanted)
-        ct, _ = changes(te, ve)
-        change_at = held_index(ct, t)
-        changed = change_at >= 0
-        age = t - ct[np.maximum(change_at, 0)] if ct.size else np.zeros_like(t)
-        short = changed & (age < self.setup)
-        bad = np.flatnonzero(undefined | short | mismatch)
-
+        held = Held(record_chunks(trace, self.direction, self))
         setup_ns = clock.ns(self.setup)
-        found = Findings(self.step, checked=t.size, n_violations=bad.size,
-                         description=f"{self.direction} steady for at least {fmt(setup_ns)} ns before each "
-                                     f"{self.step} pulse and agreeing with it (level {self.positive_level} = dir 1)")
-        for i in bad[:MAX_REPORTED]:
-            found.violations.append(self._violation(i, t, d, level, age, undefined, short, mismatch, clock))
-        if changed.any():
-            found.measured["min_setup_ns"] = clock.ns(age[changed].min())
-        found.measured["setup_violations"] = int(np.count_nonzero(short | undefined))
-        found.measured["direction_mismatches"] = int(np.count_nonzero(mismatch))
+        found = Findings(self.step, description=f"{self.direction} steady for at least {fmt(setup_ns)} ns before "
+                                                f"each {self.step} pulse and agreeing with it "
+                                                f"(level {self.positive_level} = dir 1)")
+        shortest: int | None = None
+        setup_violations = mismatches = 0
+        for t, d in pulse_chunks(trace, self.step, self):
+            value, defined, changed_at, changed = held.at(t)
+            undefined = ~defined
+            level = (value != 0).astype(np.int8)
+            wanted = level if self.positive_level == 1 else 1 - level  # the pulse dir this level means
+            mismatch = defined & (d != wanted)
+            age = t - changed_at
+            short = changed & (age < self.setup)
+            bad = np.flatnonzero(undefined | short | mismatch)
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                found.violations.append(self._violation(i, found.checked, t, d, level, age, undefined, short,
+                                                        mismatch, clock))
+            found.checked += t.size
+            if changed.any():
+                least = int(age[changed].min())
+                shortest = least if shortest is None else min(shortest, least)
+            setup_violations += int(np.count_nonzero(short | undefined))
+            mismatches += int(np.count_nonzero(mismatch))
+        if shortest is not None:
+            found.measured["min_setup_ns"] = clock.ns(shortest)
+        found.measured["setup_violations"] = setup_violations
+        found.measured["direction_mismatches"] = mismatches
         return found
 
-    def _violation(self, i: int, t: np.ndarray, d: np.ndarray, level: np.ndarray, age: np.ndarray,
+    def _violation(self, i: int, base: int, t: np.ndarray, d: np.ndarray, level: np.ndarray, age: np.ndarray,
                    undefined: np.ndarray, short: np.ndarray, mismatch: np.ndarray, clock: Clock) -> Violation:
         t_ns, setup_ns = clock.t_ns(t[i]), clock.ns(self.setup)
+        k = base + i  # the pulse's index in the train
         if undefined[i]:
-            return Violation(t_ns, 0, setup_ns, f"pulse {i}: {self.direction} has no value yet")
+            return Violation(t_ns, 0, setup_ns, f"pulse {k}: {self.direction} has no value yet")
         needed = int(d[i]) if self.positive_level == 1 else 1 - int(d[i])
         wrong = f"; pulse dir {d[i]} needs level {needed}, level is {level[i]}" if mismatch[i] else ""
         if short[i]:
             since = clock.ns(age[i])
             changed_at = clock.t_ns(t[i] - age[i])
             return Violation(t_ns, since, setup_ns,
-                             f"pulse {i}: {self.direction} changed to {level[i]} at "
+                             f"pulse {k}: {self.direction} changed to {level[i]} at "
                              f"{changed_at} ns, only {fmt(since)} ns before{wrong}")
-        return Violation(t_ns, int(level[i]), needed, f"pulse {i}: dir {d[i]} but {self.direction} is {level[i]}")
+        return Violation(t_ns, int(level[i]), needed, f"pulse {k}: dir {d[i]} but {self.direction} is {level[i]}")

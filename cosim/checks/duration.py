@@ -9,10 +9,12 @@ tripping to the last step pulse at most 2 ms::
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from cosim import validate
 from cosim.checks.base import (
@@ -21,14 +23,13 @@ from cosim.checks.base import (
     Clock,
     Findings,
     Ints,
-    changes,
     fmt,
-    pulse_times,
-    records,
-    trace_end,
+    pulse_chunks,
+    record_chunks,
 )
 from cosim.checks.result import MAX_REPORTED, Number, Violation
 from cosim.errors import ConfigurationError
+from cosim.tracecursor import Instants, change_chunks
 
 if TYPE_CHECKING:
     from cosim.trace import Trace
@@ -63,10 +64,14 @@ class EdgeRef:
             validate.finite(self.value, "value", where=f"change of {self.signal}")
         validate.choice(self.which, "which", WHICH, where=str(self))
 
+    def instant_chunks(self, trace: Trace, check: Check) -> Iterator[tuple[Ints]]:
+        """Every matching change [ticks], in time order, chunk by chunk."""
+        for t, v in change_chunks(record_chunks(trace, self.signal, check)):
+            yield (t if self.value is None else t[v == self.value],)
+
     def instants(self, trace: Trace, check: Check) -> Ints:
         """Every matching change [ticks], in time order."""
-        t, v = changes(*records(trace, self.signal, check))
-        return t if self.value is None else t[v == self.value]
+        return _joined(self.instant_chunks(trace, check))
 
     @property
     def where(self) -> str:
@@ -95,9 +100,14 @@ class PulseRef:
     def __post_init__(self) -> None:
         validate.choice(self.which, "which", WHICH, where=str(self))
 
+    def instant_chunks(self, trace: Trace, check: Check) -> Iterator[tuple[Ints]]:
+        """Every pulse [ticks], in time order, chunk by chunk."""
+        for t, _ in pulse_chunks(trace, self.signal, check):
+            yield (t,)
+
     def instants(self, trace: Trace, check: Check) -> Ints:
         """Every pulse [ticks], in time order."""
-        return pulse_times(trace, self.signal, check)[0]
+        return _joined(self.instant_chunks(trace, check))
 
     @property
     def where(self) -> str:
@@ -108,6 +118,11 @@ class PulseRef:
 
 
 Ref = EdgeRef | PulseRef
+
+
+def _joined(chunks: Iterator[tuple[Ints]]) -> Ints:
+    parts = [c[0] for c in chunks]
+    return np.concatenate(parts) if parts else np.empty(0, dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -177,30 +192,62 @@ class Duration(Check):
         return self.name or f"Duration({self.start.signal} -> {self.end.signal})"
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        candidates = self.start.instants(trace, self)
-        starts = candidates
-        if self.start.which != "each":
-            starts = candidates[:1] if self.start.which == "first" else candidates[-1:]
-        ends = self.end.instants(trace, self)
-        # window of start i: [starts[i], starts[i+1]); the last one runs to the end of the trace, inclusive
-        horizon = np.append(starts[1:], trace_end(trace, candidates, ends))
-        lo = np.searchsorted(ends, starts, side="left")
-        hi = np.searchsorted(ends, horizon, side="left")
-        if hi.size:
-            hi[-1] = np.searchsorted(ends, horizon[-1], side="right")
-        has_end = hi > lo
-        pick = np.minimum(hi - 1 if self.end.which == "last" else lo, max(ends.size - 1, 0))
-        d = np.where(has_end, (ends[pick] if ends.size else 0) - starts, horizon - starts)
+        ends = Instants(self.end.instant_chunks(trace, self))
+        rule = self._rule(clock)
+        found = Findings(self.start.signal, description=f"from {self.start} to {self.end}: {rule}",
+                         empty_detail=f"no {self.start} in the trace: nothing was measured")
+        lasting = self.end.which == "last"
+        measured: list[int] = []  # durations found: [count, min, max]
+        held: int | None = None  # the latest start: its window ends at the next start, or at the trace's end
+        last_candidate: int | None = None
+        for (candidates,) in self.start.instant_chunks(trace, self):
+            if not candidates.size:
+                continue
+            last_candidate = int(candidates[-1])
+            if self.start.which == "each":
+                starts = candidates if held is None else np.concatenate([[held], candidates])
+                nexts = starts[1:]
+                if lasting:
+                    e, has = ends.last_before(nexts)
+                    has &= e >= starts[:-1]
+                else:
+                    e, has = ends.first_at_or_after(starts[:-1])
+                    has &= e < nexts
+                self._judge(found, measured, starts[:-1], np.where(has, e, nexts), has, clock, rule)
+                held = int(starts[-1])
+            elif self.start.which == "first" and held is None:
+                held = int(candidates[0])
+        if self.start.which == "last":
+            held = last_candidate
+        if held is not None and last_candidate is not None:
+            s = np.array([held], dtype=np.int64)
+            if lasting:
+                last_end = ends.last()
+                e, has = np.array([last_end or 0]), np.array([last_end is not None and last_end >= held])
+            else:
+                e, has = ends.first_at_or_after(s)
+                last_end = ends.last()
+            horizon = max(trace.end_t, last_candidate, *(() if last_end is None else (last_end,)))
+            self._judge(found, measured, s, np.where(has, e, horizon), has, clock, rule)
+        if measured:
+            found.measured["durations"] = measured[0]
+            found.measured["min_ns"] = clock.ns(measured[1])
+            found.measured["max_ns"] = clock.ns(measured[2])
+        else:
+            found.measured["durations"] = 0
+        return found
 
+    def _judge(self, found: Findings, measured: list[int], starts: Ints, stops: Ints, has_end: npt.NDArray[np.bool_],
+               clock: Clock, rule: str) -> None:
+        """Judge the durations ``stops - starts`` (``has_end`` False: no end, the window ran to ``stops``)."""
+        found.checked += starts.size
+        d = stops - starts
         too_short = has_end & (d < self.min) if self.min is not None else np.zeros(d.size, dtype=bool)
         too_long = has_end & (d > self.max) if self.max is not None else np.zeros(d.size, dtype=bool)
         off = has_end & (np.abs(d - self.equals) > self.tol) if self.equals is not None else np.zeros(d.size, bool)
         bad = np.flatnonzero(~has_end | too_short | too_long | off)
-        rule = self._rule(clock)
-        found = Findings(self.start.signal, checked=starts.size, n_violations=bad.size,
-                         description=f"from {self.start} to {self.end}: {rule}",
-                         empty_detail=f"no {self.start} in the trace: nothing was measured")
-        for i in bad[:MAX_REPORTED]:
+        found.n_violations += bad.size
+        for i in bad[:MAX_REPORTED - len(found.violations)]:
             t0 = clock.t_ns(starts[i])
             length = clock.ns(d[i])
             if not has_end[i]:
@@ -212,12 +259,13 @@ class Duration(Check):
             elif too_long[i] and self.max is not None:
                 limit = clock.ns(self.max)
             found.violations.append(Violation(t0, length, limit, f"{self.end} {fmt(length)} ns after the start"))
-        measured = d[has_end]
-        found.measured["durations"] = int(measured.size)
-        if measured.size:
-            found.measured["min_ns"] = clock.ns(measured.min())
-            found.measured["max_ns"] = clock.ns(measured.max())
-        return found
+        lengths = d[has_end]
+        if lengths.size:
+            if measured:
+                measured[:] = [measured[0] + lengths.size, min(measured[1], int(lengths.min())),
+                               max(measured[2], int(lengths.max()))]
+            else:
+                measured[:] = [lengths.size, int(lengths.min()), int(lengths.max())]
 
     def _rule(self, clock: Clock) -> str:
         if self.equals is not None:

@@ -20,15 +20,13 @@ from cosim.checks.base import (
     Clock,
     Findings,
     as_number,
-    changes,
     fmt,
-    held_index,
-    pulse_times,
-    records,
-    signed_position,
+    pulse_chunks,
+    record_chunks,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.errors import ConfigurationError
+from cosim.tracecursor import Held, Position, change_chunks
 
 if TYPE_CHECKING:
     from cosim.trace import Trace
@@ -63,7 +61,8 @@ class EdgeAtPosition(Check):
     Matching, in order: expected edge k takes the first edge found after the one matched to k-1
     that has the expected level and a position within ``tol_counts``. Edges found that match no
     expected edge are *extra*; expected edges with no match are *missing*. The search is a loop
-    over the expected edges (not over pulses); positions are computed with numpy.
+    over the expected edges (not over pulses); positions are read from the position signal chunk by
+    chunk at the edges' instants.
 
     Violations:
 
@@ -104,16 +103,13 @@ class EdgeAtPosition(Check):
     def _positions(self, trace: Trace, t_edges: np.ndarray) -> np.ndarray:
         info = trace.info.get(self.position_signal)
         if info is not None and info.kind == "pulse":
-            tp, dp = pulse_times(trace, self.position_signal, self)
-            count = np.concatenate([[0], signed_position(dp)])
-            return count[np.searchsorted(tp, t_edges, side="right")].astype(np.float64)
-        tr, vr = records(trace, self.position_signal, self)
-        at = held_index(tr, t_edges)
-        return np.where(at >= 0, vr[np.maximum(at, 0)] if vr.size else np.nan, np.nan)
+            return Position(pulse_chunks(trace, self.position_signal, self)).at(t_edges).astype(np.float64)
+        return Held(record_chunks(trace, self.position_signal, self)).values_at(t_edges)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t_all, v_all = records(trace, self.signal, self)
-        te, ve = changes(t_all, v_all)
+        edges = list(change_chunks(record_chunks(trace, self.signal, self)))  # the edges found: as many as expected
+        te = np.concatenate([e[0] for e in edges]) if edges else np.empty(0, dtype=np.int64)
+        ve = np.concatenate([e[1] for e in edges]) if edges else np.empty(0)
         level = (ve != 0).astype(np.int64)
         pos = self._positions(trace, te)
         match = self._match(level, pos)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+import numpy.typing as npt
 
 from cosim import validate
 from cosim.checks.base import (
@@ -18,13 +19,13 @@ from cosim.checks.base import (
     Check,
     Clock,
     Findings,
+    Floats,
+    Ints,
     as_number,
     fmt,
-    held_index,
-    pulse_times,
-    records,
+    pulse_chunks,
+    record_chunks,
     signed_position,
-    trace_end,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.errors import ConfigurationError
@@ -63,28 +64,33 @@ class Bound(Check):
             validate.in_range(self.lower, "lower", high=hi, allowed=f"<= upper ({self.upper})", where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t, v = records(trace, self.signal, self)
-        low = v < self.lower if self.lower is not None else np.zeros(v.size, dtype=bool)
-        high = v > self.upper if self.upper is not None else np.zeros(v.size, dtype=bool)
-        bad = np.flatnonzero(low | high | np.isnan(v))
         rule = " and ".join(part for part in (
             None if self.lower is None else f">= {fmt(self.lower)}",
             None if self.upper is None else f"<= {fmt(self.upper)}") if part)
-        found = Findings(self.signal, checked=v.size, n_violations=bad.size, description=f"{self.signal} {rule}")
-        for i in bad[:MAX_REPORTED]:
-            limit: float | str = rule
-            side = "is not a number"
-            if low[i] and self.lower is not None:
-                limit, side = self.lower, "is below the lower bound"
-            elif high[i] and self.upper is not None:
-                limit, side = self.upper, "is above the upper bound"
-            found.violations.append(Violation(clock.t_ns(t[i]), as_number(v[i]),
-                                              limit if isinstance(limit, str) else as_number(limit),
-                                              f"{self.signal} = {fmt(v[i])} {side}"))
-        finite = v[~np.isnan(v)]
-        if finite.size:
-            found.measured.update(max=as_number(finite.max()), min=as_number(finite.min()),
-                                  max_abs=as_number(np.abs(finite).max()))
+        found = Findings(self.signal, description=f"{self.signal} {rule}")
+        top = bottom = largest = np.nan
+        for t, v in record_chunks(trace, self.signal, self):
+            found.checked += v.size
+            low = v < self.lower if self.lower is not None else np.zeros(v.size, dtype=bool)
+            high = v > self.upper if self.upper is not None else np.zeros(v.size, dtype=bool)
+            bad = np.flatnonzero(low | high | np.isnan(v))
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                limit: float | str = rule
+                side = "is not a number"
+                if low[i] and self.lower is not None:
+                    limit, side = self.lower, "is below the lower bound"
+                elif high[i] and self.upper is not None:
+                    limit, side = self.upper, "is above the upper bound"
+                found.violations.append(Violation(clock.t_ns(t[i]), as_number(v[i]),
+                                                  limit if isinstance(limit, str) else as_number(limit),
+                                                  f"{self.signal} = {fmt(v[i])} {side}"))
+            finite = v[~np.isnan(v)]
+            if finite.size:
+                top, bottom = np.fmax(top, finite.max()), np.fmin(bottom, finite.min())
+                largest = np.fmax(largest, np.abs(finite).max())
+        if not np.isnan(top):
+            found.measured.update(max=as_number(top), min=as_number(bottom), max_abs=as_number(largest))
         return found
 
 
@@ -94,49 +100,61 @@ class _Intervals(Check):
 
     def _scan(self, trace: Trace, clock: Clock, signal: str, threshold: float, *, below: bool,
               max_duration: int | None, start: int | None, until: int | None, allow_final: bool) -> Findings:
-        t, v = records(trace, signal, self)
-        end = trace_end(trace, t)
-        outside = v < threshold if below else v > threshold
-        edges = np.diff(outside.astype(np.int8), prepend=np.int8(0), append=np.int8(0))
-        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
-        still = stops == v.size  # still outside at the last record
-        t_start = t[starts]
-        t_stop = np.where(still, end, t[np.minimum(stops, max(v.size - 1, 0))])
-        extreme = (np.minimum if below else np.maximum).reduceat(
-            np.where(outside, v, np.inf if below else -np.inf), starts) if starts.size else v[:0]
-        checked = v.size
-        if until is not None:
-            keep = t_start < until
-            t_start, t_stop, still, extreme = t_start[keep], np.minimum(t_stop[keep], until), still[keep], extreme[keep]
-            checked = int(np.count_nonzero(t < until))
-        if start is not None:
-            keep = (t_stop > start) | (t_start >= start)
-            t_start, t_stop, still, extreme = np.maximum(t_start[keep], start), t_stop[keep], still[keep], extreme[keep]
-        length = t_stop - t_start
-        bad = length > max_duration if max_duration is not None else np.ones(length.size, dtype=bool)
-        allowed = bad & still if allow_final else np.zeros(length.size, dtype=bool)
-        bad &= ~allowed
-        hits = np.flatnonzero(bad)
-
         sign = "<" if below else ">"
         limit: int | float | str = f"never {sign} {fmt(threshold)}" if max_duration is None else clock.ns(max_duration)
         rule = "never" if max_duration is None else f"at most {fmt(clock.ns(max_duration))} ns at a time"
-        found = Findings(signal, checked=checked, n_violations=hits.size,
-                         description=f"{signal} {sign} {fmt(threshold)}: {rule}"
-                                     + (" (the final interval is allowed)" if allow_final else ""))
-        for i in hits[:MAX_REPORTED]:
-            tail = ", still at the end" if still[i] else ""
-            found.violations.append(Violation(
-                clock.t_ns(t_start[i]), clock.ns(length[i]), limit,
-                f"{signal} {sign} {fmt(threshold)} from {clock.t_ns(t_start[i])} to {clock.t_ns(t_stop[i])} ns "
-                f"({'lowest' if below else 'highest'} {fmt(extreme[i])}{tail})"))
-        found.measured["intervals"] = int(hits.size)
-        found.measured["total_ns"] = clock.ns(length[bad].sum())
-        found.measured["longest_ns"] = clock.ns(length[bad].max()) if hits.size else 0
-        if allowed.any():
-            found.measured["final_ns"] = clock.ns(length[allowed].max())
-        if v.size and not np.isnan(v).all():
-            found.measured["min_value" if below else "max_value"] = as_number(np.nanmin(v) if below else np.nanmax(v))
+        found = Findings(signal, description=f"{signal} {sign} {fmt(threshold)}: {rule}"
+                                             + (" (the final interval is allowed)" if allow_final else ""))
+        totals = {"intervals": 0, "total": 0, "longest": 0, "final": -1}
+        extreme_value = np.nan
+        last_t: int | None = None
+
+        def judge(t_start: Ints, t_stop: Ints, still: npt.NDArray[np.bool_], extreme: Floats) -> None:
+            if until is not None:
+                keep = t_start < until
+                t_start, t_stop, still, extreme = t_start[keep], np.minimum(t_stop[keep], until), still[keep], \
+                    extreme[keep]
+            if start is not None:
+                keep = (t_stop > start) | (t_start >= start)
+                t_start, t_stop, still, extreme = np.maximum(t_start[keep], start), t_stop[keep], still[keep], \
+                    extreme[keep]
+            length = t_stop - t_start
+            bad = length > max_duration if max_duration is not None else np.ones(length.size, dtype=bool)
+            allowed = bad & still if allow_final else np.zeros(length.size, dtype=bool)
+            bad &= ~allowed
+            hits = np.flatnonzero(bad)
+            found.n_violations += hits.size
+            for i in hits[:MAX_REPORTED - len(found.violations)]:
+                tail = ", still at the end" if still[i] else ""
+                found.violations.append(Violation(
+                    clock.t_ns(t_start[i]), clock.ns(length[i]), limit,
+                    f"{signal} {sign} {fmt(threshold)} from {clock.t_ns(t_start[i])} to {clock.t_ns(t_stop[i])} ns "
+                    f"({'lowest' if below else 'highest'} {fmt(extreme[i])}{tail})"))
+            totals["intervals"] += hits.size
+            totals["total"] += int(length[bad].sum())
+            if hits.size:
+                totals["longest"] = max(totals["longest"], int(length[bad].max()))
+            if allowed.any():
+                totals["final"] = max(totals["final"], int(length[allowed].max()))
+
+        runs = _Runs(below=below, threshold=threshold)
+        for t, v in record_chunks(trace, signal, self):
+            if not t.size:
+                continue
+            found.checked += v.size if until is None else int(np.count_nonzero(t < until))
+            if not np.isnan(v).all():
+                extreme_value = (np.fmin if below else np.fmax)(extreme_value, np.nanmin(v) if below else np.nanmax(v))
+            judge(*runs.closed(t, v))
+            last_t = int(t[-1])
+        if last_t is not None:
+            judge(*runs.still_open(max(trace.end_t, last_t)))
+        found.measured["intervals"] = totals["intervals"]
+        found.measured["total_ns"] = clock.ns(totals["total"])
+        found.measured["longest_ns"] = clock.ns(totals["longest"]) if totals["intervals"] else 0
+        if totals["final"] >= 0:
+            found.measured["final_ns"] = clock.ns(totals["final"])
+        if not np.isnan(extreme_value):
+            found.measured["min_value" if below else "max_value"] = as_number(extreme_value)
         return found
 
     def _check_options(self, threshold: float, max_duration: int | None, start: int | None,
@@ -290,25 +308,79 @@ class ValueAt(Check):
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         info = trace.info.get(self.signal)
+        any_record = False
+        last = None
         if info is not None and info.kind == "pulse":
-            times, d = pulse_times(trace, self.signal, self)
-            at = self.t if self.t is not None else trace_end(trace, times)
-            count = np.concatenate([[0], signed_position(d)])
-            value = float(count[np.searchsorted(times, at, side="right")])
-            what = "position"
+            what, value_f = "position", 0.0
+            count = 0
+            for times, d in pulse_chunks(trace, self.signal, self):
+                any_record, last = True, int(times[-1])
+                upto = d if self.t is None else d[:np.searchsorted(times, self.t, side="right")]
+                count += int(signed_position(upto)[-1]) if upto.size else 0
+            value_f = float(count)
         else:
-            times, v = records(trace, self.signal, self)
-            at = self.t if self.t is not None else trace_end(trace, times)
-            i = int(held_index(times, np.array([at], dtype=np.int64))[0])
-            value = float(v[i]) if i >= 0 else float("nan")
-            what = "value"
+            what, value_f = "value", float("nan")
+            for times, v in record_chunks(trace, self.signal, self):
+                if not times.size:
+                    continue
+                any_record, last = True, int(times[-1])
+                i = int(np.searchsorted(times, self.t, side="right")) - 1 if self.t is not None else times.size - 1
+                if i >= 0:
+                    value_f = float(v[i])
+        at = self.t if self.t is not None else max(trace.end_t, trace.end_t if last is None else last)
+        value = value_f
         limit = as_number(self.expected) if self.tol == 0 else f"{fmt(self.expected)} ± {fmt(self.tol)}"
-        found = Findings(self.signal, checked=1 if times.size else 0,
+        found = Findings(self.signal, checked=1 if any_record else 0,
                          description=f"{what} of {self.signal} at {clock.t_ns(at)} ns is {limit}")
-        if times.size and not abs(value - self.expected) <= self.tol:  # NaN fails too
+        if any_record and not abs(value - self.expected) <= self.tol:  # NaN fails too
             found.n_violations = 1
             found.violations.append(Violation(clock.t_ns(at), as_number(value), limit,
                                               f"{what} of {self.signal} is {fmt(value)}, expected {limit}"))
         if not np.isnan(value):
             found.measured["value"] = as_number(value)
         return found
+
+
+class _Runs:
+    """Runs of records below (or above) a threshold, found chunk by chunk.
+
+    A run starts at the first record outside the threshold and stops at the next record inside it;
+    its extreme is the lowest (highest) value in it. A run still open at the end of a chunk is
+    carried to the next.
+    """
+
+    def __init__(self, *, below: bool, threshold: float) -> None:
+        self.below = below
+        self.threshold = threshold
+        self.open_t: int | None = None  # start of the run still open
+        self.open_extreme = np.inf if below else -np.inf
+
+    def closed(self, t: Ints, v: Floats) -> tuple[Ints, Ints, npt.NDArray[np.bool_], Floats]:
+        """The runs that stop in this chunk: ``(start, stop, still open at the end (False), extreme)``."""
+        outside = v < self.threshold if self.below else v > self.threshold
+        was_open = self.open_t is not None
+        edges = np.diff(outside.astype(np.int8), prepend=np.int8(was_open), append=np.int8(0))
+        starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+        reduce = np.minimum if self.below else np.maximum
+        masked = np.where(outside, v, np.inf if self.below else -np.inf)
+        firsts = np.concatenate([[0], starts]) if was_open else starts
+        extreme = reduce.reduceat(masked, firsts) if firsts.size else masked[:0]
+        t_start = t[starts]
+        if was_open:
+            assert self.open_t is not None
+            extreme[0] = reduce(extreme[0], self.open_extreme)
+            t_start = np.concatenate([[self.open_t], t_start])
+        ends_open = stops.size and stops[-1] == v.size  # the last run reaches the chunk's end
+        if ends_open:
+            self.open_t, self.open_extreme = int(t_start[-1]), float(extreme[-1])
+            t_start, extreme, stops = t_start[:-1], extreme[:-1], stops[:-1]
+        else:
+            self.open_t, self.open_extreme = None, (np.inf if self.below else -np.inf)
+        return t_start.astype(np.int64), t[stops].astype(np.int64), np.zeros(stops.size, dtype=bool), extreme
+
+    def still_open(self, end: int) -> tuple[Ints, Ints, npt.NDArray[np.bool_], Floats]:
+        """The run open at the end of the records, stopped at ``end`` (none if there is none)."""
+        if self.open_t is None:
+            return np.empty(0, np.int64), np.empty(0, np.int64), np.zeros(0, bool), np.empty(0)
+        return (np.array([self.open_t], dtype=np.int64), np.array([end], dtype=np.int64), np.ones(1, dtype=bool),
+                np.array([self.open_extreme]))

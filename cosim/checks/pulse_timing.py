@@ -1,11 +1,13 @@
 """Pulse-train timing: minimum spacing, maximum rate, pulses per time slot.
 
-All three read the materialised pulse instants of a pulse train (:meth:`Trace.pulses`) and work on
-whole arrays at once: no Python loop per pulse. Rates are compared in exact integer arithmetic.
+All three read the pulse instants of a pulse train chunk by chunk (:meth:`Trace.pulse_chunks`) and
+work on whole chunks at once: no Python loop per pulse, memory bounded by a chunk. Rates are
+compared in exact integer arithmetic.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
@@ -13,8 +15,17 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cosim import validate
-from cosim.checks.base import TICKS, Check, Clock, Findings, fmt, pulse_times
+from cosim.checks.base import (
+    TICKS,
+    Check,
+    Clock,
+    Findings,
+    Ints,
+    fmt,
+    pulse_chunks,
+)
 from cosim.checks.result import MAX_REPORTED, Number, Violation
+from cosim.tracecursor import Int8s, with_previous
 
 if TYPE_CHECKING:
     from cosim.trace import Trace
@@ -66,19 +77,23 @@ class MinPulseSpacing(Check):
         validate.integer(self.min_spacing, "min_spacing", low=1, unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t, _ = pulse_times(trace, self.signal, self)
-        gaps = np.diff(t)
-        bad = np.flatnonzero(gaps < self.min_spacing)
         limit = clock.ns(self.min_spacing)
-        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
-                         description=f"{self.signal}: pulses at least {limit} ns apart")
-        for i in bad[:MAX_REPORTED]:
-            gap = clock.ns(gaps[i])
-            found.violations.append(Violation(
-                clock.t_ns(t[i + 1]), gap, limit,
-                f"pulse {i + 1} only {fmt(gap)} ns after pulse {i} at {clock.t_ns(t[i])} ns"))
-        if gaps.size:
-            found.measured["min_spacing_ns"] = clock.ns(gaps.min())
+        found = Findings(self.signal, description=f"{self.signal}: pulses at least {limit} ns apart")
+        smallest: int | None = None
+        for t, _, base in with_previous(pulse_chunks(trace, self.signal, self)):
+            found.checked = base + t.size
+            gaps = np.diff(t)
+            bad = np.flatnonzero(gaps < self.min_spacing)
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                gap = clock.ns(gaps[i])
+                found.violations.append(Violation(
+                    clock.t_ns(t[i + 1]), gap, limit,
+                    f"pulse {base + i + 1} only {fmt(gap)} ns after pulse {base + i} at {clock.t_ns(t[i])} ns"))
+            if gaps.size:
+                smallest = int(gaps.min()) if smallest is None else min(smallest, int(gaps.min()))
+        if smallest is not None:
+            found.measured["min_spacing_ns"] = clock.ns(smallest)
         return found
 
 
@@ -116,47 +131,71 @@ class MaxPulseRate(Check):
             validate.integer(self.window, "window", low=1, unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t, _ = pulse_times(trace, self.signal, self)
+        chunks = pulse_chunks(trace, self.signal, self)
         rate = validate.positive(self.max_rate_hz, "max_rate_hz", where=self.where)
         limit = _number(rate)
         if self.window is None:
-            return self._instantaneous(t, rate, limit, clock)
-        return self._windowed(t, rate, limit, self.window, clock)
+            return self._instantaneous(chunks, rate, limit, clock)
+        return self._windowed(chunks, rate, limit, self.window, clock)
 
-    def _instantaneous(self, t: np.ndarray, rate: Fraction, limit: Number, clock: Clock) -> Findings:
+    def _instantaneous(self, chunks: Iterable[tuple[Ints, Int8s]], rate: Fraction, limit: Number,
+                       clock: Clock) -> Findings:
         # spacing * rate >= ticks_per_second  <=>  spacing >= ceil(ticks_per_second / rate) for integer spacing
         bound = clock.timebase.ticks_per_second / rate
         min_gap = -((-bound.numerator) // bound.denominator)
-        gaps = np.diff(t)
-        bad = np.flatnonzero(gaps < min_gap)
-        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
-                         description=f"{self.signal}: instantaneous pulse rate at most {fmt(limit)} Hz")
-        for i in bad[:MAX_REPORTED]:
-            found.violations.append(Violation(
-                clock.t_ns(t[i + 1]), _rate_hz(1, int(gaps[i]), clock), limit,
-                f"pulse {i + 1} {fmt(clock.ns(gaps[i]))} ns after the one before "
-                f"(at least {fmt(clock.ns(min_gap))} ns needed)"))
-        if gaps.size:
-            found.measured["max_rate_hz"] = _rate_hz(1, int(gaps.min()), clock)
+        found = Findings(self.signal, description=f"{self.signal}: instantaneous pulse rate at most {fmt(limit)} Hz")
+        smallest: int | None = None
+        for t, _, base in with_previous(chunks):
+            found.checked = base + t.size
+            gaps = np.diff(t)
+            bad = np.flatnonzero(gaps < min_gap)
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                found.violations.append(Violation(
+                    clock.t_ns(t[i + 1]), _rate_hz(1, int(gaps[i]), clock), limit,
+                    f"pulse {base + i + 1} {fmt(clock.ns(gaps[i]))} ns after the one before "
+                    f"(at least {fmt(clock.ns(min_gap))} ns needed)"))
+            if gaps.size:
+                smallest = int(gaps.min()) if smallest is None else min(smallest, int(gaps.min()))
+        if smallest is not None:
+            found.measured["max_rate_hz"] = _rate_hz(1, smallest, clock)
         return found
 
-    def _windowed(self, t: np.ndarray, rate: Fraction, limit: Number, window: int, clock: Clock) -> Findings:
+    def _windowed(self, chunks: Iterable[tuple[Ints, Int8s]], rate: Fraction, limit: Number, window: int,
+                  clock: Clock) -> Findings:
         allowed = rate * window * clock.timebase.resolution_s
         most = allowed.numerator // allowed.denominator
-        counts = np.searchsorted(t, t + window, side="left") - np.arange(t.size)
-        bad = np.flatnonzero(counts > most)
         w_ns = clock.ns(window)
-        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
-                         description=f"{self.signal}: pulse rate over any {fmt(w_ns)} ns at most {fmt(limit)} Hz "
-                                     f"({most} pulses)")
-        for i in bad[:MAX_REPORTED]:
-            start = clock.t_ns(t[i])
-            found.violations.append(Violation(
-                start, _rate_hz(int(counts[i]), window, clock), limit,
-                f"{counts[i]} pulses in [{start}, {start + w_ns}) ns, at most {most} allowed"))
-        if counts.size:
-            found.measured["max_rate_hz"] = _rate_hz(int(counts.max()), window, clock)
-            found.measured["max_pulses_per_window"] = int(counts.max())
+        found = Findings(self.signal, description=f"{self.signal}: pulse rate over any {fmt(w_ns)} ns at most "
+                                                  f"{fmt(limit)} Hz ({most} pulses)")
+        fullest = -1
+
+        def count(pending: Ints, ready: int) -> None:
+            # pulses in [t, t + window) for the first `ready` pulses of `pending` (all later ones known)
+            nonlocal fullest
+            counts = np.searchsorted(pending, pending[:ready] + window, side="left") - np.arange(ready)
+            bad = np.flatnonzero(counts > most)
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                start = clock.t_ns(pending[i])
+                found.violations.append(Violation(
+                    start, _rate_hz(int(counts[i]), window, clock), limit,
+                    f"{counts[i]} pulses in [{start}, {start + w_ns}) ns, at most {most} allowed"))
+            if counts.size:
+                fullest = max(fullest, int(counts.max()))
+
+        pending = np.empty(0, dtype=np.int64)
+        for t, _ in chunks:
+            found.checked += t.size
+            pending = np.concatenate([pending, t])
+            # a window is complete once a pulse at or after its end has been read
+            ready = int(np.searchsorted(pending, pending[-1] - window, side="right"))
+            count(pending, ready)
+            pending = pending[ready:]
+        count(pending, pending.size)
+        if fullest >= 0:
+            found.measured["max_rate_hz"] = _rate_hz(fullest, window, clock)
+            found.measured["max_pulses_per_window"] = fullest
         return found
 
 
@@ -193,20 +232,39 @@ class PulsesPerWindow(Check):
         validate.integer(self.start, "start", unit="ticks", kind=TICKS, where=self.where)
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
-        t, _ = pulse_times(trace, self.signal, self)
-        k = (t - self.start) // self.window
-        first = np.flatnonzero(np.diff(k, prepend=k[:1] - 1)) if k.size else np.empty(0, dtype=np.int64)
-        counts = np.diff(np.append(first, k.size))
-        bad = np.flatnonzero(counts > self.max_count)
         w_ns = clock.ns(self.window)
-        found = Findings(self.signal, checked=t.size, n_violations=bad.size,
-                         description=f"{self.signal}: at most {self.max_count} pulses per {fmt(w_ns)} ns window")
-        for i in bad[:MAX_REPORTED]:
-            begin = self.start + int(k[first[i]]) * self.window
-            found.violations.append(Violation(
-                clock.t_ns(begin), int(counts[i]), self.max_count,
-                f"{counts[i]} pulses in [{clock.t_ns(begin)}, {clock.t_ns(begin + self.window)}) ns"))
-        if counts.size:
-            found.measured["max_pulses_per_window"] = int(counts.max())
-            found.measured["windows_with_pulses"] = int(counts.size)
+        found = Findings(self.signal, description=f"{self.signal}: at most {self.max_count} pulses per "
+                                                  f"{fmt(w_ns)} ns window")
+        fullest, windows = -1, 0
+        open_k, open_count = 0, 0  # the last window seen, which the next chunk may continue
+
+        def close(k: Ints, counts: Ints) -> None:
+            nonlocal fullest, windows
+            bad = np.flatnonzero(counts > self.max_count)
+            found.n_violations += bad.size
+            for i in bad[:MAX_REPORTED - len(found.violations)]:
+                begin = self.start + int(k[i]) * self.window
+                found.violations.append(Violation(
+                    clock.t_ns(begin), int(counts[i]), self.max_count,
+                    f"{counts[i]} pulses in [{clock.t_ns(begin)}, {clock.t_ns(begin + self.window)}) ns"))
+            if counts.size:
+                fullest, windows = max(fullest, int(counts.max())), windows + counts.size
+
+        for t, _ in pulse_chunks(trace, self.signal, self):
+            found.checked += t.size
+            k = (t - self.start) // self.window
+            first = np.flatnonzero(np.diff(k, prepend=k[:1] - 1))
+            counts = np.diff(np.append(first, k.size))
+            k = k[first]
+            if open_count and int(k[0]) == open_k:
+                counts[0] += open_count
+            elif open_count:
+                close(np.array([open_k]), np.array([open_count]))
+            close(k[:-1], counts[:-1])
+            open_k, open_count = int(k[-1]), int(counts[-1])
+        if open_count:
+            close(np.array([open_k]), np.array([open_count]))
+        if windows:
+            found.measured["max_pulses_per_window"] = fullest
+            found.measured["windows_with_pulses"] = windows
         return found

@@ -22,9 +22,9 @@ host records (:class:`FillRecord`, :attr:`HostApp.t_buffer_mode`) are in ticks.
 
 from __future__ import annotations
 
-from collections.abc import Generator, Sequence
+from collections.abc import Generator, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, overload
 
 from cosim.controllers.pokeys.buffer import Entry, check_entry, signed_count
 from cosim.controllers.pokeys.engine import PulseEngine
@@ -65,6 +65,63 @@ class FillRecord:
     accepted: int
 
 
+class FillLog:
+    """The host's fill round trips, reduced as they come: totals of all of them, the first ``keep`` in full.
+
+    A job of an hour sends over a million fill commands; keeping each as a :class:`FillRecord`
+    would make the run's memory grow with simulated time, and only the totals are used (figures,
+    reports). ``len()`` is the number of fills sent; indexing and iteration give the records kept.
+
+    Parameters
+    ----------
+    keep : int
+        Records kept in full (the first ones), >= 0.
+
+    Attributes
+    ----------
+    offered, accepted : int
+        Slots offered and accepted over all fills [slots].
+    partial : int
+        Fills of which the device took fewer slots than offered.
+    longest_round_trip : int
+        Longest time from sending a fill to its reply [ticks] (0 before the first).
+    """
+
+    def __init__(self, keep: int = 1000) -> None:
+        self.keep = integer(keep, "keep", low=0, unit="records")
+        self.kept: list[FillRecord] = []
+        self.count = 0
+        self.offered = 0
+        self.accepted = 0
+        self.partial = 0
+        self.longest_round_trip = 0
+
+    def append(self, record: FillRecord) -> None:
+        """Count one fill (and keep it if fewer than ``keep`` are kept)."""
+        self.count += 1
+        self.offered += record.offered
+        self.accepted += record.accepted
+        self.partial += record.accepted < record.offered
+        self.longest_round_trip = max(self.longest_round_trip, record.t_reply - record.t_send)
+        if len(self.kept) < self.keep:
+            self.kept.append(record)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __iter__(self) -> Iterator[FillRecord]:
+        return iter(self.kept)
+
+    @overload
+    def __getitem__(self, index: int) -> FillRecord: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[FillRecord]: ...
+
+    def __getitem__(self, index: int | slice) -> FillRecord | list[FillRecord]:
+        return self.kept[index]
+
+
 class HostApp:
     """A host application streaming a job into the engine's slot buffer.
 
@@ -86,9 +143,13 @@ class HostApp:
         Injected host stalls.
     start_ns : int
         When the host starts [ns].
+    keep_fills : int
+        Fill round trips kept in full in :attr:`fills` (the first ones; all are counted).
 
     Attributes
     ----------
+    fills : FillLog
+        The fill round trips: ``len(fills)`` commands sent, their totals, the first ``keep_fills``.
     t_buffer_mode : int or None
         When the host sent "buffer mode" [ticks] (its own clock's origin for the queued-slot estimate).
     t_last_accepted : int or None
@@ -98,10 +159,13 @@ class HostApp:
     def __init__(self, sim: Simulation, engine: PulseEngine, entries: Sequence[object], *,
                  link: str | LinkProfile = "usb", period_ns: int = 1_000_000, prefill_slots: int = BUFFER_SLOTS,
                  max_slots_per_fill: int = FILL_SLOTS_PER_PACKET, stalls: Sequence[Stall] = (),
-                 start_ns: int = 0) -> None:
+                 start_ns: int = 0, keep_fills: int = 1000) -> None:
         self.sim = sim
         self.engine = engine
-        self.entries: list[Entry] = [_checked(engine, e, i) for i, e in enumerate(entries)]
+        # equal entries share one object: a job of an hour holds millions of slots, mostly repeats
+        shared: dict[Entry, Entry] = {}
+        self.entries: list[Entry] = [shared.setdefault(raw, raw) for raw in
+                                     (_checked(engine, e, i) for i, e in enumerate(entries))]
         self.link = Link(sim, link)
         self.period_ns = integer(period_ns, "period_ns", low=1, high=10**10, unit="ns")
         self.period = sim.ticks(period_ns, "ns", name="period_ns")
@@ -117,7 +181,7 @@ class HostApp:
         self.start_ns = integer(start_ns, "start_ns", low=0, unit="ns")
         self.start = sim.ticks(start_ns, "ns", name="start_ns")
         self.read_pointer = 0
-        self.fills: list[FillRecord] = []
+        self.fills = FillLog(keep_fills)
         self.t_buffer_mode: int | None = None
         self.t_last_accepted: int | None = None
         sim.process(self.refill_buffer())

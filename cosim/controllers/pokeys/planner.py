@@ -105,11 +105,12 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
     """
     position = list(start) if start is not None else [0] * len(axes)
     out: list[Counts] = []
+    shared: dict[Counts, Counts] = {}  # equal slots share one tuple: an hour's job is millions of slots
     for step in steps:
         if isinstance(step, Dwell):
             out.extend([(0,) * len(axes)] * step.slots)
         else:
-            out.extend(plan_move(position, step, axes))
+            out.extend(shared.setdefault(slot, slot) for slot in plan_move(position, step, axes))
             position = list(step.target)
     return out
 
@@ -117,13 +118,15 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
 def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
     """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit."""
     entries = []
+    shared: dict[Entry, Entry] = {}  # equal entries share one object (as in :func:`plan`)
     negative: list[bool] = []
     for slot in counts:
         negative = negative or [False] * len(slot)
         for a, c in enumerate(slot):
             if c:
                 negative[a] = c < 0
-        entries.append(encode_entry(slot, negative=negative))
+        entry = encode_entry(slot, negative=negative)
+        entries.append(shared.setdefault(entry, entry))
     return entries
 
 
