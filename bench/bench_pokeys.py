@@ -1,25 +1,40 @@
-"""Real-time factor of the PoKeys pulse engine on a 60 s 3-axis job at up to 25 kHz, beside a naive model.
+"""Real-time factor of a 60 s 3-axis PoKeys job at up to 25 kHz with three Stepper FMUs, beside a naive model.
 
-The same job runs in one process: through :class:`PulseEngine` (one pulse-train segment per slot
-and axis) alone, through it with three Stepper FMUs (NEMA 17 preset with its L/R current loop,
-FMI 3.0, ``max_step`` 100 us so that the FMU's own bounds set its steps) coupled by
-the cosim.couplings.stepper coupling, and through the naive model of
-:mod:`cosim.testing.pokeys_naive` (one SimPy event per pulse). All are fed by the host model over
-the USB link. Then every pulse of the segment run is checked (at most 25 per slot, spacing,
-direction set-up) and the steppers' ``commanded_steps`` are compared with the engine counters.
-Printed: wall time per part (engine, FMUs = the difference between the runs with and without
-them, checks) and the real-time factors (simulated time / wall time). Run::
+The job: out-and-back straight 3-axis moves (x at up to 25 kHz, y and z at 3/4 and 1/2 of it),
+planned by the host planner, streamed by the host model over USB with a 10 ms loop into
+:class:`PulseEngine` (one pulse-train segment per slot and axis). Timed parts, each ``--repeat``
+times (min / median / max), in wall time and in process CPU time:
 
-    .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--no-naive] [--no-steppers] [--ideal-driver]
-                                           [--max-step 1e-4]
+* **planning**: the host planner turning the moves into per-slot counts (before the run);
+* **engine + host**: the simulation without plants;
+* **engine + host + 3 Stepper FMUs**: each axis drives a Stepper FMU loaded exactly as the
+  bundled ``pokeys_job`` scenario loads it (FMI 3.0, the NEMA 17 preset, the FMU's own
+  ``max_step``: nothing is set for the bench), coupled by :func:`couple_stepper`; the time spent
+  inside the FMU calls (adapter and C) is measured around each call, not as a difference of runs;
+* **checks**: 9 checks over every pulse (at most 25 per slot, 40 us spacing, direction set-up, on
+  each axis), run on the stepper run's trace;
+* **the issue's job** = planning + engine + host + FMUs + checks: its real-time factor
+  (simulated time / process CPU time) is the headline figure;
+* the **naive model** (:mod:`cosim.testing.pokeys_naive`: one SimPy event per pulse, no plants),
+  compared with the engine alone.
+
+The steppers' ``commanded_steps`` are compared with the engine's counters after every run. Run::
+
+    .venv/bin/python bench/bench_pokeys.py [--seconds 60] [--repeat 3] [--no-naive] [--no-steppers]
+                                           [--ideal-driver] [--max-step S] [--fmi 3]
+
+``--max-step`` and ``--ideal-driver`` change the plants away from the scenario's (the output then
+says so).
 """
 
 from __future__ import annotations
 
 import argparse
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable
 from typing import Any
+
+from clock import Lap, Series, machine_load, measure, spread
 
 from cosim.checks import DirectionSetup, MinPulseSpacing, PulsesPerWindow
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
@@ -29,135 +44,182 @@ from cosim.couplings.stepper import couple_stepper
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.presets import load_preset
-from cosim.signals import Signal
 from cosim.testing.pokeys_naive import naive_pulse_engine
 
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
-
-
-def job(seconds: int, config: EngineConfig) -> list[bytes]:
-    """Out-and-back moves until the job lasts at least ``seconds``."""
-    counts: list[tuple[int, ...]] = []
-    k = 0
-    while len(counts) * SLOT_NS < seconds * 1_000_000_000:
-        counts.extend(plan([Move(FAR if k % 2 == 0 else (0, 0, 0))], config.axes,
-                           start=(0, 0, 0) if k % 2 == 0 else FAR))
-        k += 1
-    return to_entries(counts)
-
-
+PRESET = "nema17_17hs16_2004s1"  # the bundled pokeys_job scenario's plants
 IDEAL_DRIVER = {"phase_inductance": 0.0}  # ideal current source: no L/R current loop
-MAX_STEP_S = 1e-4  # the FMU's solver: its own bounds (natural period / 50, 0.25 rad electrical, pulses) govern
 
 
-class StandIn:
-    """A plant that takes every input and does nothing: measures the coupling's own cost."""
+def moves_for(seconds: int, config: EngineConfig) -> list[Move]:
+    """Out-and-back moves, enough for the job to last at least ``seconds`` (worked out before any timing)."""
+    slots_per_move = len(plan([Move(FAR)], config.axes))
+    count = -(-seconds * 1_000_000_000 // (slots_per_move * SLOT_NS))
+    return [Move(FAR if k % 2 == 0 else (0, 0, 0)) for k in range(count)]
 
-    def __init__(self, sim: Simulation, name: str) -> None:
-        self.sim = sim
-        self.name = name
 
-    def variable_names(self) -> list[str]:
-        return ["step_rate", "step_phase", "commanded_steps"]
+def job(moves: list[Move], config: EngineConfig) -> list[bytes]:
+    """The job's slot entries: the moves planned in one call, as the pokeys_job scenario plans them."""
+    return to_entries(plan(moves, config.axes))
 
-    def set(self, values: Mapping[str, float]) -> None:
-        pass
 
-    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
-        return lambda values: None
+class CallTimer:
+    """Process CPU and wall time spent inside one FMU's calls (doStep, get, set, prepared writers)."""
 
-    def read(self, variable: str) -> object:
-        return 0
+    def __init__(self) -> None:
+        self.lap = Lap()
+        self.calls = 0
 
-    def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
-        raise NotImplementedError
+    def wrap(self, function: Callable[..., Any]) -> Callable[..., Any]:
+        lap, cpu, wall = self.lap, time.process_time, time.perf_counter
+
+        def timed(*args: Any, **kwargs: Any) -> Any:
+            self.calls += 1
+            w0, c0 = wall(), cpu()
+            try:
+                return function(*args, **kwargs)
+            finally:
+                lap.cpu_s += cpu() - c0
+                lap.wall_s += wall() - w0
+
+        return timed
+
+    def instrument(self, plant: Plant) -> None:
+        fmu = plant.fmu
+        for name in ("advance_to", "get", "set"):
+            setattr(fmu, name, self.wrap(getattr(fmu, name)))
+        writer, reader = fmu.writer, fmu.reader
+        fmu.writer = lambda *a, **k: self.wrap(writer(*a, **k))  # type: ignore[method-assign]
+        fmu.reader = lambda *a, **k: self.wrap(reader(*a, **k))  # type: ignore[method-assign]
 
 
 def simulate(kind: Callable[..., Any], entries: list[bytes], config: EngineConfig, *,
-             steppers: bool = False, stand_ins: bool = False, ideal_driver: bool = False,
-             max_step_s: float = MAX_STEP_S) -> tuple[Simulation, float, int]:
-    """Run the job; with ``steppers`` three Stepper FMUs (loaded before the clock starts) follow the
-    axes, with ``stand_ins`` three plants that do nothing."""
+             plant_parameters: dict[str, Any] | None = None, fmi_version: int = 3,
+             timer: CallTimer | None = None) -> tuple[Simulation, Lap, int]:
+    """Run the job; with ``plant_parameters`` three Stepper FMUs (loaded before the clock starts) follow the axes."""
     sim = Simulation(seed=1)
     engine: PulseEngine = kind(sim, config)
     HostApp(sim, engine, entries, link="usb", prefill_slots=100, period_ns=10_000_000)
     plants = []
-    if stand_ins:
-        for i, a in enumerate(AXES):
-            couple_stepper(engine.step_dir(i), StandIn(sim, f"stand_in_{a}"))
-    if steppers:
-        preset = {**load_preset("nema17_17hs16_2004s1"), "max_step": max_step_s,
-                  **(IDEAL_DRIVER if ideal_driver else {})}
-        plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", parameters=preset) for a in AXES]
+    if plant_parameters is not None:
+        plants = [Plant.load(sim, "Stepper", name=f"stepper_{a}", fmi_version=fmi_version,
+                             parameters=plant_parameters) for a in AXES]
         for i, plant in enumerate(plants):
+            if timer is not None:
+                timer.instrument(plant)
             couple_stepper(engine.step_dir(i), plant)
     until = (len(entries) + 200) * engine.slot_ticks
-    started = time.perf_counter()
-    sim.run(until=until)
-    wall = time.perf_counter() - started
+    with measure() as lap:
+        sim.run(until=until)
     assert engine.underruns == [], engine.underruns
     for i, plant in enumerate(plants):
         commanded = int(plant.read("commanded_steps"))
         assert commanded == engine.positions[i].value == engine.steps[i].position, (commanded, i)
     sim.close()
-    return sim, wall, until
+    return sim, lap, until
+
+
+def check_every_pulse(sim: Simulation, config: EngineConfig) -> Lap:
+    """The 9 pulse checks of the job over every pulse of ``sim``'s trace (they must pass)."""
+    with measure() as lap:
+        results = []
+        for a in AXES:
+            step = f"pokeys.{a}.step"
+            results += [PulsesPerWindow(step, 25, sim.ticks("1 ms")).evaluate(sim.trace),
+                        MinPulseSpacing(step, sim.ticks("40 us")).evaluate(sim.trace),
+                        DirectionSetup(step, f"pokeys.{a}.dir", sim.ticks(config.dir_setup_ns, "ns"),
+                                       positive_level=0).evaluate(sim.trace)]
+    assert all(r.passed for r in results), [r.summary() for r in results if not r.passed]
+    return lap
+
+
+def line(label: str, series: Series, simulated_s: float | None = None, note: str = "") -> str:
+    text = f"  {label:44s} cpu {spread(series.cpu())} s   wall {spread(series.wall())} s"
+    if simulated_s is not None:
+        text += f"   RTF cpu {spread([simulated_s / c for c in series.cpu()], '{:.1f}')}x"
+    return text + (f"   {note}" if note else "")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=int, default=60, help="job length [s] (default 60)")
+    parser.add_argument("--repeat", type=int, default=3, help="runs of every part (default 3: min/median/max)")
     parser.add_argument("--no-naive", action="store_true", help="skip the naive per-pulse model")
-    parser.add_argument("--no-steppers", action="store_true", help="skip the run with three stepper FMUs")
+    parser.add_argument("--no-steppers", action="store_true", help="skip the runs with three Stepper FMUs")
     parser.add_argument("--ideal-driver", action="store_true",
-                        help="stepper FMUs with an ideal current source (no L/R current loop)")
-    parser.add_argument("--max-step", type=float, default=MAX_STEP_S,
-                        help=f"the stepper FMUs' max_step [s] (default {MAX_STEP_S:g}; the FMU's own default is 10e-6)")
+                        help="NOT the scenario's plants: Stepper FMUs with an ideal current source (no L/R loop)")
+    parser.add_argument("--max-step", type=float, default=None,
+                        help="NOT the scenario's plants: the Stepper FMUs' max_step [s] (default: the FMU's own)")
+    parser.add_argument("--fmi", type=int, choices=(2, 3), default=3, help="the Stepper FMUs' FMI version (default 3)")
     args = parser.parse_args()
 
     config = EngineConfig(axes=uniform_axes(max_speed_hz=25_000, accel=500_000, decel=500_000))
-    started = time.perf_counter()
-    entries = job(args.seconds, config)
-    plan_s = time.perf_counter() - started
-    sim, engine_s, until = simulate(PulseEngine, entries, config)
-    simulated_s = sim.timebase.seconds(until)
-    pulses = sum(int(sim.trace.segments(f"pokeys.{a}.step")["count"].sum()) for a in AXES)
+    parameters: dict[str, Any] = dict(load_preset(PRESET))
+    changed = []
+    if args.max_step is not None:
+        parameters["max_step"] = args.max_step
+        changed.append(f"max_step = {args.max_step:g} s")
+    if args.ideal_driver:
+        parameters.update(IDEAL_DRIVER)
+        changed.append("ideal driver")
+    if args.fmi != 3:
+        changed.append(f"FMI {args.fmi}.0")
+    print(f"machine: {machine_load()} (before)")
 
-    started = time.perf_counter()
-    results = []
-    for a in AXES:
-        step = f"pokeys.{a}.step"
-        results += [PulsesPerWindow(step, 25, sim.ticks("1 ms")).evaluate(sim.trace),
-                    MinPulseSpacing(step, sim.ticks("40 us")).evaluate(sim.trace),
-                    DirectionSetup(step, f"pokeys.{a}.dir", sim.ticks(config.dir_setup_ns, "ns"),
-                                   positive_level=0).evaluate(sim.trace)]
-    checks_s = time.perf_counter() - started
-    assert all(r.passed for r in results), [r.summary() for r in results if not r.passed]
+    planning, engine, engine_checks, coupled, fmu_calls, checks, naive = (Series() for _ in range(7))
+    job_total: list[Lap] = []
+    entries: list[bytes] = []
+    simulated_s, pulses, calls = 0.0, 0, 0
+    moves = moves_for(args.seconds, config)
+    for _ in range(args.repeat):
+        with measure() as lap:
+            entries = job(moves, config)
+        planning.add(lap)
+        sim, lap, until = simulate(PulseEngine, entries, config)
+        engine.add(lap)
+        engine_checks.add(check_every_pulse(sim, config))
+        simulated_s = sim.timebase.seconds(until)
+        pulses = sum(int(sim.trace.segments(f"pokeys.{a}.step")["count"].sum()) for a in AXES)
+        if not args.no_steppers:
+            timer = CallTimer()
+            sim, lap, _ = simulate(PulseEngine, entries, config, plant_parameters=parameters,
+                                   fmi_version=args.fmi, timer=timer)
+            coupled.add(lap)
+            fmu_calls.add(timer.lap)
+            calls = timer.calls
+            check_lap = check_every_pulse(sim, config)
+            checks.add(check_lap)
+            job_total.append(Lap(planning.laps[-1].wall_s + lap.wall_s + check_lap.wall_s,
+                                 planning.laps[-1].cpu_s + lap.cpu_s + check_lap.cpu_s))
+        if not args.no_naive:
+            naive_sim, lap, _ = simulate(naive_pulse_engine, entries, config)
+            naive.add(lap)
+            assert sum(naive_sim.trace.pulses(f"pokeys.{a}.step")[0].size for a in AXES) == pulses
 
-    print(f"job: {simulated_s:.1f} s simulated, {len(entries)} slots, {pulses} pulses on 3 axes (max 25 kHz)")
-    print(f"  planning (host planner, before the run)  {plan_s:8.3f} s")
-    print(f"  engine + host simulation                 {engine_s:8.3f} s   RTF {simulated_s / engine_s:7.1f}x")
-    print(f"  checks over every pulse ({len(results)} checks)      {checks_s:8.3f} s")
-    total = engine_s + checks_s
-    print(f"  engine + checks                          {total:8.3f} s   RTF {simulated_s / total:7.1f}x")
+    print(f"job: {simulated_s:.1f} s simulated, {len(entries)} slots, {pulses} pulses on 3 axes (max 25 kHz); "
+          f"{args.repeat} runs: min / median / max")
+    print(line("planning (host planner, before the run)", planning))
+    print(line("engine + host simulation", engine, simulated_s))
+    print(line("checks over every pulse (9 checks)", engine_checks))
     if not args.no_steppers:
-        _, stand_in_s, _ = simulate(PulseEngine, entries, config, stand_ins=True)
-        print(f"  engine + host + coupling to 3 stand-ins   {stand_in_s:8.3f} s   (the coupling alone: "
-              f"{stand_in_s - engine_s:.3f} s)")
-        _, coupled_s, _ = simulate(PulseEngine, entries, config, steppers=True, ideal_driver=args.ideal_driver,
-                                   max_step_s=args.max_step)
-        print(f"  engine + host + 3 stepper FMUs           {coupled_s:8.3f} s   RTF {simulated_s / coupled_s:7.1f}x")
-        print(f"    of which the FMUs and their coupling   {coupled_s - engine_s:8.3f} s   "
-              "(commanded_steps = counters: checked)")
-        print(f"    of which the FMU calls (adapter + C)   {coupled_s - stand_in_s:8.3f} s")
-        full = coupled_s + checks_s
-        print(f"  engine + FMUs + checks (the issue's job) {full:8.3f} s   RTF {simulated_s / full:7.1f}x")
+        plants = f"3 Stepper FMUs ({PRESET}" + (", " + ", ".join(changed) if changed else ", as pokeys_job") + ")"
+        print(line(f"engine + host + {plants}"[:44], coupled, simulated_s, plants))
+        print(line("  of which inside the FMU calls", fmu_calls, None,
+                   f"({calls} calls per run, adapter + C, timed around each call)"))
+        rest = Series([Lap(c.wall_s - f.wall_s - e.wall_s, c.cpu_s - f.cpu_s - e.cpu_s)
+                       for c, f, e in zip(coupled.laps, fmu_calls.laps, engine.laps, strict=True)])
+        print(line("  coupling and master (the rest)", rest, None, "(stepper run - FMU calls - engine run)"))
+        print(line("checks over every pulse of that run", checks))
+        total = Series(job_total)
+        print(line("THE JOB: planning + run + FMUs + checks", total, simulated_s))
     if not args.no_naive:
-        naive_sim, naive_s, _ = simulate(naive_pulse_engine, entries, config)
-        naive_pulses = sum(naive_sim.trace.pulses(f"pokeys.{a}.step")[0].size for a in AXES)
-        assert naive_pulses == pulses
-        print(f"  naive model, one event per pulse         {naive_s:8.3f} s   RTF {simulated_s / naive_s:7.1f}x")
-        print(f"segment engine / naive model: {naive_s / engine_s:.1f}x faster "
-              f"({(naive_s + checks_s) / total:.1f}x with the same checks added to both)")
+        print(line("naive model, one event per pulse", naive, simulated_s))
+        ratio = [n / e for n, e in zip(naive.cpu(), engine.cpu(), strict=True)]
+        print(f"  segment engine / naive model (engine + host alone, cpu): {spread(ratio, '{:.1f}')}x faster")
+        if not args.no_steppers:
+            ratio = [n / t.cpu_s for n, t in zip(naive.cpu(), job_total, strict=True)]
+            print(f"  naive model (no plants, no checks) / the job (cpu): {spread(ratio, '{:.1f}')}x")
+    print(f"machine: {machine_load()} (after)")
 
 
 if __name__ == "__main__":

@@ -7,9 +7,10 @@ buffer topped up with fill-buffer requests (18 slots per 64-byte packet, the dev
 many as fit), sleeping ``--period-ms`` between top-ups. At the end it waits for the buffer to run
 empty and compares the device's positions with the pulses it sent.
 
-Printed: host-side figures (fills, buffer-empty observations, request round trips), the server's
-lag report, its underruns and the PoKeys checks over every recorded pulse (from ``device.json``).
-Run::
+Printed: host-side figures (fills, buffer-empty observations, request round trips), the process
+CPU time of the host and of the server (counted once it has ended) beside the wall time, the
+server's lag report, its underruns and the PoKeys checks over every recorded pulse (from
+``device.json``). Run::
 
     .venv/bin/python bench/bench_pokeys_device.py [--seconds 60] [--model 57E|56E] [--port 20056]
 """
@@ -23,6 +24,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from clock import cpu_s, machine_load
 
 from cosim.controllers.pokeys import SLOT_NS, uniform_axes
 from cosim.controllers.pokeys.planner import Move, plan
@@ -112,6 +115,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=None, help="server results folder (default: a temporary one)")
     args = parser.parse_args()
 
+    print(f"machine: {machine_load()}")
     slots = job(args.seconds)
     expected = tuple(sum(s[a] for s in slots) for a in range(3))
     pulses = sum(abs(c) for s in slots for c in s)
@@ -131,9 +135,9 @@ def main() -> int:
         with PoKeysClient("127.0.0.1", args.port, transport="udp", timeout_s=0.2) as client:
             host = Host(client, args.model)
             host.start()
-            started = time.perf_counter()
+            started, host_cpu = time.perf_counter(), cpu_s()
             stream(host, slots, args.period_ms / 1000)
-            wall = time.perf_counter() - started
+            wall, host_cpu = time.perf_counter() - started, cpu_s() - host_cpu
             positions = host.positions()
             trips = sorted(host.round_trips)
             print(f"host: {host.fills} fills in {wall:.1f} s, round trip median {trips[len(trips) // 2] * 1e3:.2f} ms, "
@@ -141,10 +145,14 @@ def main() -> int:
             print(f"final positions {positions} (pulses sent {expected}): "
                   f"{'EQUAL' if tuple(positions) == expected else 'DIFFERENT'}")
         server.send_signal(2)
+        children_cpu = cpu_s(children=True) - cpu_s()
         log, _ = server.communicate(timeout=120)
+        server_cpu = cpu_s(children=True) - cpu_s() - children_cpu
     finally:
         if server.poll() is None:
             server.kill()
+    print(f"process CPU: host {host_cpu:.2f} s while streaming ({wall:.1f} s wall), server {server_cpu:.2f} s "
+          "over its whole run")
     print("server:\n  " + "\n  ".join(log.strip().splitlines()))
     summary = json.loads((out / "device.json").read_text())
     lag = summary["lag"]

@@ -1,7 +1,8 @@
 """Sweep speed-up on Dask: the same 200-run sweep with 1 and with 2 local workers.
 
-Prints both wall times, the speed-up and whether the two tables are identical (they must be).
-Run::
+Prints both wall times, the process CPU time of each sweep (this process and its worker
+processes, counted once they have ended), the speed-up and whether the two tables are identical
+(they must be). Run::
 
     .venv/bin/python bench/bench_sweep.py [--runs 200] [--scenario laser_pwm] [--random pwm_on=0:1000]
     .venv/bin/python bench/bench_sweep.py --scenario trio_speed_link --random speed=200:1000
@@ -15,6 +16,7 @@ from __future__ import annotations
 import argparse
 
 import pandas as pd
+from clock import machine_load, measure
 
 from cosim.sweep import parse_random, plan, sweep
 
@@ -28,11 +30,14 @@ def main() -> None:
     args = parser.parse_args()
     runs = plan(args.scenario, random=parse_random([args.random]), samples=args.runs, seed=1)
     tables = {}
+    print(f"machine: {machine_load()}")
     for workers in (1, 2):
-        tables[workers] = sweep(args.scenario, runs, workers=workers, progress=False)
+        with measure(children=True) as lap:
+            tables[workers] = sweep(args.scenario, runs, workers=workers, progress=False)
         attrs = tables[workers].attrs
         print(f"  {workers} worker(s): {attrs['wall_time_s']:7.2f} s for {len(runs)} runs "
-              f"(of which {attrs['startup_s']:.2f} s starting the cluster)")
+              f"(of which {attrs['startup_s']:.2f} s starting the cluster); process CPU {lap.cpu_s:.2f} s "
+              "(with the workers')")
     pd.testing.assert_frame_equal(tables[1], tables[2])
     one, two = tables[1].attrs, tables[2].attrs
     print(f"  speed-up 2 vs 1 workers: {one['wall_time_s'] / two['wall_time_s']:.2f}x in all, "

@@ -114,7 +114,7 @@ def _coupling_roles() -> dict[str, tuple[Mapping[str, str | None], tuple[str, ..
     """Each coupling: its roles (bundled names), the roles it may leave unconnected, and whether any one suffices."""
     from cosim.couplings import encoder, laser, servo, stepper, switches
 
-    return {"stepper": (stepper.ROLES, ("commanded_steps",), False),
+    return {"stepper": (stepper.ROLES, ("step_segments", "commanded_steps"), False),
             "laser": (laser.ROLES, ("clock_hz",), False),
             "switches": (switches.ROLES, tuple(switches.ROLES), True),
             "encoder": (encoder.ROLES, (), False),

@@ -9,11 +9,17 @@ before the kernel moves its clock from ``now`` to the next scheduled instant ``t
 look-ahead is called with ``t_next``. Nothing can change the plant's inputs in ``[now, t_next)``,
 so the plant may safely advance to ``t_next``; if it finds an event earlier it schedules it, and
 the kernel runs that event first.
+
+A callback scheduled with :meth:`Simulation.call_at` can be taken back with
+:meth:`Simulation.cancel` before it fires: it then never runs, and :meth:`Simulation.due_by` /
+:meth:`Simulation.skip_to` no longer see it (a coupling that arms a check for an instant which
+usually turns out not to be needed keeps the controllers' shortcut working).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
+from heapq import heappop
 from typing import Any
 
 import simpy
@@ -35,8 +41,23 @@ class _Environment(simpy.Environment):
         self.on_progress: Callable[[int], None] | None = None
         self._steps = 0  # kernel events run
         self._work = 0  # kernel events and the passes fast paths run without one (for progress)
+        self.cancelled = 0  # cancelled events still in the queue (dropped when they reach its head)
+
+    def drop_cancelled(self) -> None:
+        """Remove cancelled events from the head of the queue."""
+        queue = self._queue
+        while queue and getattr(queue[0][3], "cancelled", False):
+            heappop(queue)
+            self.cancelled -= 1
+
+    def peek(self) -> float:
+        if self.cancelled:
+            self.drop_cancelled()
+        return super().peek()
 
     def step(self) -> None:
+        if self.cancelled:
+            self.drop_cancelled()
         self._steps += 1
         self.count_step(self._now)
         if self.look_aheads:
@@ -45,7 +66,6 @@ class _Environment(simpy.Environment):
                 for look_ahead in self.look_aheads:
                     look_ahead(int(t_next))
         super().step()
-
 
     def count_step(self, now: float) -> None:
         """Count one step of work (a kernel event, or a pass a fast path ran without one); report progress."""
@@ -56,6 +76,8 @@ class _Environment(simpy.Environment):
 
 class At(Event):
     """An event that fires at an absolute tick with a named priority."""
+
+    cancelled = False  # set by Simulation.cancel
 
     def __init__(self, env: simpy.Environment, t: int, priority: int, value: Any = None) -> None:
         super().__init__(env)
@@ -122,10 +144,25 @@ class Simulation:
         return At(self.env, self.now + delay, priority, value)
 
     def call_at(self, t: int, priority: int, callback: Callable[[], None]) -> Event:
-        """Run ``callback()`` at tick ``t`` with ``priority`` (no process needed)."""
+        """Run ``callback()`` at tick ``t`` with ``priority`` (no process needed); :meth:`cancel` takes it back."""
         event = self.at(t, priority)
         event.callbacks.append(lambda _event: callback())
         return event
+
+    def cancel(self, event: Event) -> None:
+        """Take back an event of :meth:`call_at` that has not fired: its callback never runs.
+
+        From then on :meth:`due_by` and :meth:`skip_to` do not see it (it leaves the queue when it
+        reaches the queue's head). An event that has fired or is cancelled already is left alone.
+        Only for events no process waits on: a process waiting on a cancelled event would wait for ever.
+        """
+        if not isinstance(event, At):
+            raise ConfigurationError(f"cancel: {event!r} is not an event of Simulation.call_at")
+        if event.callbacks is None or event.cancelled:
+            return
+        event.cancelled = True
+        event.callbacks = []
+        self.env.cancelled += 1
 
     def due_by(self, t: int) -> bool:
         """Is any event queued at or before tick ``t``? (SimPy's public ``peek``.)

@@ -10,6 +10,10 @@ A :class:`Plant` is advanced (one ``doStep`` from its own time to now) only
   stepped to the next instant at which anything else happens; an FMI 3.0 FMU that returns early
   at an event inside that step has its watched outputs published at the exact event tick.
 
+An input whose values carry their own instants (a schedule, such as the Stepper's pulse-train
+segments) does not advance the plant at all: it is written just before the plant's next step,
+whatever asks for that step (:meth:`Plant.before_step`, :meth:`Plant.ahead_writer`).
+
 Never on a fixed grid unless a scenario asks for sampling, so results do not depend on how many
 samples are requested (beyond the FMU's own solver tolerance).
 
@@ -95,6 +99,7 @@ class Plant:
         self.steps = 0
         self._watched: dict[str, Signal] = {}
         self._pending: dict[str, float] = {}
+        self._before_step: list[Callable[[int], None]] = []
         sim.on_close(fmu.close)
 
     @classmethod
@@ -135,6 +140,8 @@ class Plant:
             self._check_watched(now)
 
     def _advance_to(self, t: int) -> None:
+        for hook in self._before_step:
+            hook(t)
         reached = self.fmu.advance_to(t)
         self.steps += 1
         while reached < t:  # early return at an event: go on (watched plants never lag now)
@@ -181,6 +188,27 @@ class Plant:
             write(values)
 
         return set_now
+
+    def before_step(self, hook: Callable[[int], None]) -> None:
+        """Call ``hook(t)`` just before every step of the FMU to tick ``t`` (whatever asks for the step).
+
+        For inputs the master may set late (:meth:`ahead_writer`): a coupling collects them as they
+        are announced and writes them in its hook, so the FMU is stepped only when an output is needed,
+        another input changes or it announces an event, never for these inputs alone.
+        """
+        self._before_step.append(hook)
+
+    def ahead_writer(self, variable: str, values: np.ndarray) -> Callable[[], None]:
+        """A function writing the contents of ``values`` to the Float64 array input ``variable``, without advancing.
+
+        Only for inputs whose values carry their own instants (a schedule, such as the Stepper's
+        ``step_segments``: each row says when its pulses fall), which the FMU applies at those
+        instants: a value written while the FMU lags behind the simulation's time still holds
+        everything the FMU has to place from its own time on. Call it from a :meth:`before_step`
+        hook. ``values``: a C-contiguous float64 numpy array of the variable's size, filled by the
+        caller before each call (FMI 3.0; the call is prepared once).
+        """
+        return self.fmu.array_writer(variable, values)
 
     # -- outputs ----------------------------------------------------------------------------
     def read(self, variable: str) -> Value:
@@ -301,6 +329,8 @@ class Plant:
     def _look_ahead(self, t_next: int) -> None:
         if self.fmu.t >= t_next or self.fmu.terminated is not None:
             return
+        for hook in self._before_step:
+            hook(t_next)
         try:
             reached = self.fmu.advance_to(t_next)
         except PlantTerminated as ended:

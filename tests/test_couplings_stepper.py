@@ -17,13 +17,13 @@ import pytest
 from cosim.controllers.pokeys import AXES, AxisConfig, EngineConfig, EngineState, PulseEngine, encode_entry
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
-from cosim.couplings.stepper import couple_stepper
+from cosim.couplings.stepper import StepperCoupling, couple_stepper
 from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.master import Plant
 from cosim.presets import load_preset
-from cosim.signals import Signal
+from cosim.signals import PulseTrain, Signal, StepDirPort
 
 pytestmark = pytest.mark.fmu
 
@@ -206,3 +206,81 @@ class RenamedPlant(RecordingPlant):
 
     def set(self, values: Mapping[str, float]) -> None:
         self.sets.append((self.sim.now, dict(values)))  # type: ignore[arg-type]
+
+
+# -- how the segments reach the plant -------------------------------------------------------------------
+def three_axis_job(sim: Simulation, *,
+                   fmi_version: int | None) -> tuple[PulseEngine, list[Plant], list[StepperCoupling]]:
+    """The 3-axis job of the first test; plants of ``fmi_version`` (None: no plants)."""
+    config = EngineConfig(axes=tuple(AxisConfig(max_speed_hz=24_000, accel=400_000, decel=400_000) for _ in AXES))
+    engine = PulseEngine(sim, config)
+    plants = [] if fmi_version is None else [
+        Plant.load(sim, "Stepper", name=f"stepper_{a}", fmi_version=fmi_version,
+                   parameters={**load_preset(PRESET), "limit_neg_position": -1.0}) for a in AXES]
+    couplings = [couple_stepper(engine.step_dir(i), plant) for i, plant in enumerate(plants)]
+    HostApp(sim, engine, to_entries(plan([Move((3_000, -2_250, 1_500))], config.axes)), link="usb", prefill_slots=64)
+    return engine, plants, couplings
+
+
+@pytest.mark.parametrize("fmi_version", [3, 2])
+def test_couplings_cost_no_kernel_event_per_slot_and_keep_the_engines_shortcut(fmi_version: int) -> None:
+    """The job runs with as many kernel steps as without plants, plus two per instant where a run of
+    segments ends (the coupling's stop there, and the engine's next slot, which it cannot skip to
+    past that event). FMI 3.0: the segments way, the plants stepped once per 64 rows or so; FMI 2.0:
+    the rate way, the rate set at each slot start."""
+    steps, stops = {}, set()
+    for plants in (None, fmi_version):
+        with Simulation(seed=1) as sim:
+            engine, fmus, couplings = three_axis_job(sim, fmi_version=plants)
+            sim.run(until=300 * MS)
+            steps[plants] = sim.env._steps
+            for i, (plant, coupling) in enumerate(zip(fmus, couplings, strict=True)):
+                assert int(plant.read("commanded_steps")) == engine.positions[i].value
+                assert coupling.way == ("segments" if fmi_version == 3 else "rate")
+                assert coupling.deferred == 0 and coupling.rate_hz == 0.0
+                segments = sim.trace.segments(f"pokeys.{AXES[i]}.step")
+                ends, starts = segments["t0"] + segments["duration"], set(segments["t0"].tolist())
+                stops |= {int(t) for t in ends if int(t) not in starts}
+                assert plant.steps < (len(ends) // 60 + 5 if fmi_version == 3 else len(ends) + 5)
+    assert 1 <= len(stops) < 20
+    assert steps[fmi_version] - steps[None] == 2 * len(stops)
+
+
+class PhaseRecorder(RecordingPlant):
+    """Test double: records ``(t, {variable: value})`` of every setter call."""
+
+    def __init__(self, sim: Simulation) -> None:
+        super().__init__(sim)
+        self.calls: list[tuple[int, dict[str, float]]] = []
+
+    def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
+        return lambda values: self.calls.append((self.sim.now, dict(zip(variables, values, strict=True))))
+
+
+def test_the_rate_is_set_at_the_slot_start_with_the_phase_of_the_first_pulse_at_t0(sim: Simulation) -> None:
+    """7 pulses per 1 ms slot 5 us after the slot start: the rate is set at the slot start with phase
+    1 - 5 us * 7 kHz = 0.965, so the train's first pulse falls at 5 us; the next slot (4 pulses) the
+    same way; 0 at the end of the run (5 us after the third slot start)."""
+    engine = PulseEngine(sim)
+    plant = PhaseRecorder(sim)
+    coupling = couple_stepper(engine.step_dir(0), plant)
+    engine.fill_buffer([encode_entry((7, 0, 0)), encode_entry((7, 0, 0)), encode_entry((4, 0, 0))])
+    engine.set_state(EngineState.BUFFER)
+    sim.run(until=5 * MS)
+    assert plant.calls == [(0, {"step_rate": 7_000.0, "step_phase": 1 - 5_000 * 7 / 1e6}),
+                           (2 * MS, {"step_rate": 4_000.0, "step_phase": 1 - 5_000 * 4 / 1e6}),
+                           (3 * MS + 5_000, {"step_rate": 0.0})]
+    assert coupling.way == "rate" and coupling.deferred == 0 and coupling.settings == 3
+
+
+def test_a_segment_announced_more_than_a_pulse_period_ahead_is_set_at_its_start(sim: Simulation) -> None:
+    """A controller announcing at t = 0 a segment that starts at 30 us with pulses 25 us apart: no
+    phase in [0, 1) puts the first pulse there, so the rate is set at 30 us by a kernel event."""
+    train = PulseTrain(sim, "ctl.x.step")
+    port = StepDirPort(train, Signal(sim, "ctl.x.dir"))
+    plant = PhaseRecorder(sim)
+    coupling = couple_stepper(port, plant)
+    train.emit(30_000, 1 * MS, 40, 1)
+    sim.run(until=2 * MS)
+    assert plant.calls == [(30_000, {"step_rate": 40_000.0}), (1 * MS + 30_000, {"step_rate": 0.0})]
+    assert coupling.deferred == 1

@@ -81,6 +81,19 @@ def test_a_failing_process_leaves_the_trace_ending_at_the_failure(sim: Simulatio
     assert sim.trace.end_t == 200
 
 
+def slot_loop(sim: Simulation, log: list[object], skipped: list[int]) -> object:
+    """A loop at 0, 100, 200, ... that runs passes by skip_to while it can (those also in ``skipped``)."""
+    k = 0
+    while True:
+        yield sim.at(k * 100, Priority.SLOT)
+        log.append(("loop", sim.now))
+        k += 1
+        while sim.skip_to(k * 100):
+            log.append(("loop", sim.now))
+            skipped.append(sim.now)
+            k += 1
+
+
 def test_skip_to_moves_the_clock_only_when_nothing_is_due_before(sim: Simulation, log: list[object]) -> None:
     """A loop at 0, 100, 200, ... skips its events until the one queued at 250 is next.
 
@@ -90,23 +103,44 @@ def test_skip_to_moves_the_clock_only_when_nothing_is_due_before(sim: Simulation
     """
     skipped: list[int] = []
 
-    def loop() -> object:
-        k = 0
-        while True:
-            yield sim.at(k * 100, Priority.SLOT)
-            log.append(("loop", sim.now))
-            k += 1
-            while sim.skip_to(k * 100):
-                log.append(("loop", sim.now))
-                skipped.append(sim.now)
-                k += 1
-
     sim.call_at(250, Priority.HOST, lambda: log.append(("other", sim.now)))
-    sim.process(loop())  # type: ignore[arg-type]
+    sim.process(slot_loop(sim, log, skipped))  # type: ignore[arg-type]
     sim.run(until=450)
     assert log == [("loop", 0), ("loop", 100), ("loop", 200), ("other", 250), ("loop", 300), ("loop", 400)]
     assert skipped == [100, 200, 400]  # 300 came from its event (250 was queued when 200 ran); until 450 stops 500
     assert not sim.skip_to(399)  # never back
+
+
+def test_a_cancelled_callback_never_runs_and_no_longer_stops_skip_to(sim: Simulation, log: list[object]) -> None:
+    """The loop of the skip_to test with the other event at 250 taken back at 150: the passes at
+    300 and 400 are skipped (300 had to wait for 250 before), and cancelling again, or an event
+    that has fired, changes nothing.
+
+    t:      0   50   100   150     200  250  300   400
+    loop    L        L             L         L*    L*      (* = run by skip_to)
+    events      F          cancel       (O: cancelled)
+    """
+    skipped: list[int] = []
+    other = sim.call_at(250, Priority.HOST, lambda: log.append(("other", sim.now)))
+    fired = sim.call_at(50, Priority.HOST, lambda: log.append(("fired", sim.now)))
+    assert sim.due_by(250)
+
+    def cancel_at_150() -> None:
+        sim.cancel(other)
+        sim.cancel(other)  # twice: no effect
+        sim.cancel(fired)  # fired at 50: no effect
+
+    sim.call_at(150, Priority.HOST, cancel_at_150)
+    sim.process(slot_loop(sim, log, skipped))  # type: ignore[arg-type]
+    sim.run(until=450)
+    assert log == [("loop", 0), ("fired", 50), ("loop", 100), ("loop", 200), ("loop", 300), ("loop", 400)]
+    assert skipped == [300, 400]  # 100 and 200 waited for the events at 50 and 150
+    assert not sim.due_by(449) and sim.env.cancelled == 0  # the cancelled event has left the queue
+
+
+def test_only_call_at_events_can_be_cancelled(sim: Simulation) -> None:
+    with pytest.raises(ConfigurationError, match=r"is not an event of Simulation\.call_at"):
+        sim.cancel(sim.env.timeout(5))
 
 
 def test_skip_to_refuses_while_a_look_ahead_is_registered(sim: Simulation) -> None:

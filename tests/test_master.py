@@ -12,6 +12,7 @@ from fractions import Fraction
 from functools import partial
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from cosim.controllers.scripted import play
@@ -140,3 +141,50 @@ def test_setter_refused_value_names_variable_value_and_range(fmi_version: int) -
             plant.setter(["enable"])
         with pytest.raises(ConfigurationError, match=r"0 values for 1 variables \(step_rate\)"):
             plant.setter(["step_rate"])([])
+
+
+def test_before_step_hooks_see_every_step_and_its_target_before_it_is_taken() -> None:
+    """Samples every 1 ms (the sample loop) and a read at 1.5 ms (an output needed): each step to t
+    is announced as t while the FMU is still at the previous instant."""
+    with Simulation() as sim:
+        laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "pwm_period": 1000, "pwm_on": 400})
+        seen: list[tuple[int, int]] = []
+        laser.before_step(lambda t: seen.append((t, laser.fmu.t)))
+        laser.record(["power"], period=MS)
+        sim.call_at(1_500 * US, 40, lambda: laser.read("energy"))
+        sim.run(until=3 * MS + 1)
+    assert seen == [(MS, 0), (1_500 * US, MS), (2 * MS, 1_500 * US), (3 * MS, 2 * MS)]
+
+
+def test_before_step_hooks_see_the_look_ahead_steps_of_a_watched_plant() -> None:
+    with Simulation() as sim:
+        stepper = Plant.load(sim, "Stepper", name="stepper")
+        stepper.watch("limit_pos")
+        seen: list[int] = []
+        stepper.before_step(seen.append)
+        for t in (2 * MS, 5 * MS):
+            sim.call_at(t, 40, lambda: None)
+        sim.run(until=7 * MS)
+    assert seen == [2 * MS, 5 * MS, 7 * MS]  # the look-ahead steps to each next instant, the last to until
+
+
+def test_an_ahead_writer_sets_a_schedule_without_stepping_the_plant() -> None:
+    """Segment rows written at t = 0 for 5 pulses in [2 ms, 3 ms): nothing steps the FMU until the
+    read at 1.5 ms (no pulse yet) and the one at 4 ms (all five)."""
+    with Simulation() as sim:
+        stepper = Plant.load(sim, "Stepper", name="stepper")
+        rows = np.zeros((64, 3))
+        write = stepper.ahead_writer("step_segments", rows)
+        rows[0] = (2e-3, 1e-3, 5)
+        write()
+        assert (stepper.steps, stepper.fmu.t) == (0, 0)
+        reads: list[int] = []
+        for t in (1_500 * US, 4 * MS):
+            sim.call_at(t, 40, lambda: reads.append(int(stepper.read("commanded_steps"))))
+        sim.run(until=5 * MS)
+        assert reads == [0, 5] and stepper.steps == 2
+        assert float(stepper.read("last_pulse_time")) == pytest.approx(2e-3 + 4 * 1e-3 / 5, abs=1e-15)
+        with pytest.raises(ConfigurationError, match=r"needs a C-contiguous float64 numpy array of 192 elements"):
+            stepper.ahead_writer("step_segments", np.zeros((64, 2)))
+        with pytest.raises(ConfigurationError, match=r"takes a Float64 array of an FMI 3.0 FMU; got step_rate"):
+            stepper.ahead_writer("step_rate", np.zeros(1))

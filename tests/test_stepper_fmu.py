@@ -172,14 +172,22 @@ def slot_controller(periods_ns: list[int]) -> tuple[list[tuple[int, int, Fractio
     return slots, pulses
 
 
-def test_one_step_per_slot_equals_one_step_per_pulse(stepper_fmu: Path) -> None:
+# The two ways of driving below cut the solver's steps differently: per slot the rate changes at
+# each slot end, where the solver starts a new grid; per pulse it runs from pulse to pulse. RK4 on
+# max_step = 10 us steps gives the same trajectory to 1e-9 rad either way; the pulse update takes
+# steps of up to 1/25 of the natural period (146 us for these parameters), where the two cuts differ
+# by up to 1.3e-8 rad (7e-6 microstep) and 2.6e-5 rad/s (1e-6 of the speed).
+@pytest.mark.parametrize(("rk4_only", "angle_tol", "speed_tol"), [(True, 1e-9, 1e-6), (False, 2e-8, 5e-5)],
+                         ids=["rk4", "pulse_update"])
+def test_one_step_per_slot_equals_one_step_per_pulse(stepper_fmu: Path, rk4_only: bool, angle_tol: float,
+                                                     speed_tol: float) -> None:
     rates = np.r_[np.linspace(2_000, 40_000, 20), np.linspace(40_000, 2_000, 20)]
     slots, pulses = slot_controller([round(1e9 / r) for r in rates])
     slot_ends = [start + MS for start, _, _ in slots]
     outputs = ("commanded_steps", "last_pulse_time", "angle", "speed")
 
     per_slot = []
-    with Fmu(stepper_fmu) as fmu:
+    with Fmu(stepper_fmu, parameters={"rk4_only": rk4_only}) as fmu:
         for (_, period, phase), end in zip(slots, slot_ends, strict=True):
             fmu.set("step_rate", 1e9 / period)
             fmu.set("step_phase", float(phase))
@@ -188,7 +196,7 @@ def test_one_step_per_slot_equals_one_step_per_pulse(stepper_fmu: Path) -> None:
 
     per_pulse, seen = [], []
     following = dict(zip(pulses, [*pulses[1:], slot_ends[-1] + 1], strict=True))
-    with Fmu(stepper_fmu) as fmu:
+    with Fmu(stepper_fmu, parameters={"rk4_only": rk4_only}) as fmu:
         t = 0
         for stop in sorted((set(pulses) | set(slot_ends)) - {0}):
             if t in following:  # one event per pulse: a train anchored at this pulse
@@ -206,8 +214,8 @@ def test_one_step_per_slot_equals_one_step_per_pulse(stepper_fmu: Path) -> None:
     assert [row[0] for row in per_slot] == [row[0] for row in per_pulse] == expected_counts
     for a, b in zip(per_slot, per_pulse, strict=True):
         assert a[1] == pytest.approx(b[1], abs=1e-12)  # same pulse instants [s]
-        assert a[2] == pytest.approx(b[2], abs=1e-9)  # same trajectory [rad]
-        assert a[3] == pytest.approx(b[3], abs=1e-6)  # [rad/s]
+        assert a[2] == pytest.approx(b[2], abs=angle_tol)  # same trajectory [rad]
+        assert a[3] == pytest.approx(b[3], abs=speed_tol)  # [rad/s]
     assert [round(row[1] * 1e9) for row in per_slot] == [max(p for p in pulses if p < end) for end in slot_ends]
 
 
@@ -387,6 +395,131 @@ def test_lead_screw_moves_the_carriage_both_ways(stepper_fmu: Path) -> None:
         advance(fmu, 400 * MS)
         assert fmu.get("commanded_steps") == -320
         assert fmu.get("carriage_position") == pytest.approx(0.1 - 0.1 * 0.005, abs=0.005 / 3200)
+
+
+# -- pulse-train segments (FMI 3.0) ------------------------------------------------------------------
+def segment_rows(*rows: tuple[float, float, int]) -> np.ndarray:
+    table = np.zeros((64, 3))
+    table[:len(rows)] = rows
+    return table
+
+
+def test_segment_rows_place_pulse_k_at_start_plus_k_duration_over_n(stepper_fmi3: Path) -> None:
+    """Rows (1 ms, 1 ms, +4) and (2 ms, 1 ms, -2), set at t = 0: pulses at 1, 1.25, 1.5, 1.75 ms
+    forward and 2, 2.5 ms back; a pulse at a step's end belongs to the next step, as for step_rate."""
+    pulses = [(1_000_000, 0, 1), (1_250_000, 1, 2), (1_500_000, 2, 3), (1_750_000, 3, 4), (2_000_000, 4, 3),
+              (2_500_000, 3, 2)]  # (t [ns], commanded_steps just before, just after)
+    with Fmu(stepper_fmi3) as fmu:
+        fmu.set("step_segments", segment_rows((1e-3, 1e-3, 4), (2e-3, 1e-3, -2)))
+        for t_ns, before, after in pulses:
+            fmu.advance_to(t_ns)
+            assert fmu.get("commanded_steps") == before
+            fmu.advance_to(t_ns + 1)
+            assert fmu.get("commanded_steps") == after
+            assert fmu.get("last_pulse_time") == pytest.approx(t_ns * 1e-9, abs=1e-15)
+
+
+def test_segment_rows_are_a_value_that_can_be_set_ahead_on_any_grid(stepper_fmi3: Path, sim: Simulation) -> None:
+    """The same rows, set once, placed the same whatever the steps: one step, or 60 random ones."""
+    rows = segment_rows(*[(k * 1e-3 + 5e-6, 1e-3, 7 + k % 3) for k in range(40)])
+    grid = [*np.cumsum(sim.rng.integers(1 * US, 600 * US, size=60)).tolist(), 41 * MS]
+    with Fmu(stepper_fmi3, parameters=load_preset(NEMA17)) as one, \
+            Fmu(stepper_fmi3, parameters=load_preset(NEMA17)) as many:
+        one.set("step_segments", rows)
+        many.set("step_segments", rows)
+        for t in grid:
+            many.advance_to(int(t))
+        one.advance_to(int(grid[-1]))
+        assert one.get("commanded_steps") == many.get("commanded_steps") == sum(7 + k % 3 for k in range(40))
+        for name in ("angle", "speed", "current_a", "current_b"):  # the solver's grid is anchored at the pulses
+            assert many.get(name) == pytest.approx(one.get(name), rel=1e-12, abs=1e-15), name
+
+
+def test_segment_rows_add_to_the_rate_train(stepper_fmi3: Path) -> None:
+    with Fmu(stepper_fmi3, parameters={"step_rate": 1000.0}) as fmu:
+        fmu.set("step_segments", segment_rows((0.0, 1e-3, -25)))
+        fmu.advance_to(10 * MS)
+        assert fmu.get("commanded_steps") == 10 - 25
+
+
+@pytest.mark.parametrize(("row", "message"), [
+    ((1e-3, 0.0, 5), "row 1 = (0.001 s, 0 s, 5) is not allowed (allowed: a finite start, a duration > 0 s, a whole"),
+    ((1e-3, 1e-3, 2.5), "row 1 = (0.001 s, 0.001 s, 2.5) is not allowed"),
+    ((0.5e-3, 1e-3, 5), "row 1 starts at 0.00050000000000000001 s, before the previous row with pulses ends (0.001 s)"),
+])
+def test_bad_segment_rows_fail_the_step_with_the_row_and_the_rule(stepper_fmi3: Path, row: tuple[float, float, float],
+                                                                  message: str) -> None:
+    with Fmu(stepper_fmi3) as fmu:
+        fmu.set("step_segments", segment_rows((0.0, 1e-3, 3), row))
+        with pytest.raises(FmuError, match="input step_segments") as info:
+            fmu.advance_to(MS)
+        assert message in str(info.value)
+
+
+def test_fmi2_has_no_segment_rows() -> None:
+    with Fmu(ensure_fmu("Stepper", 2)) as fmu, \
+            pytest.raises(ConfigurationError, match="no variable named 'step_segments'"):
+        fmu.variable("step_segments")
+
+
+# -- the pulse update against RK4 ------------------------------------------------------------------------
+def ramp_rows(top_hz: int, slots: int) -> list[tuple[float, float, int]]:
+    """A PoKeys-like job on one axis: 500 000 pulses/s^2 up to top_hz, held, and down, one row per 1 ms slot."""
+    rows, v, position = [], 0.0, 0.0
+    for k in range(slots):
+        v = min(v + 0.5, top_hz / 1000, (slots - k) * 0.5)
+        count = math.floor(position + v) - math.floor(position)
+        position += v
+        rows.append((k * 1e-3 + 5e-6, 1e-3, count))
+    return rows
+
+
+def drive_rows(fmu: Fmu, rows: list[tuple[float, float, int]]) -> list[list[float]]:
+    """Set the rows 60 at a time, stepping to each batch's last start; the state at every batch end."""
+    out = []
+    for first in range(0, len(rows), 60):
+        batch = rows[max(0, first - 1):first + 60]  # the running row too
+        fmu.set("step_segments", segment_rows(*batch))
+        advance(fmu, round(batch[-1][0] * 1e9))
+        out.append([fmu.get(name) for name in ("angle", "speed", "current_a", "current_b", "lost_full_steps")])
+    advance(fmu, round((rows[-1][0] + rows[-1][1]) * 1e9))
+    return out
+
+
+@pytest.mark.parametrize("top_hz", [12_500, 25_000])
+def test_pulse_update_follows_the_motor_closer_than_rk4_on_10_us_steps(stepper_fmi3: Path, top_hz: int) -> None:
+    """NEMA 17 preset (L/R driver, detent) up to 12.5 or 25 kHz and back over 1.2 s, against RK4 on
+    1 us steps: the pulse update (one step per pulse, no RK4 fallback) stays within 5e-4 microstep
+    and 0.02 mA (measured 1.4e-4 / 3.0e-4 microstep, 5e-5 / 9e-3 mA); RK4 on the default 10 us
+    steps, the previous solver, is 1.6e-4 / 1.1e-3 microstep and 2e-3 / 0.03 mA off."""
+    rows = ramp_rows(top_hz, 1_200)
+    preset = {**load_preset(NEMA17), "limit_neg_position": -1.0}
+    results = {}
+    for name, extra in (("reference", {"rk4_only": True, "max_step": 1e-6}), ("pulse_update", {})):
+        with Fmu(stepper_fmi3, parameters={**preset, **extra}) as fmu:
+            results[name] = np.array(drive_rows(fmu, rows))
+            if name == "pulse_update":
+                assert fmu.get("solver_rk4_steps") == 0
+                assert fmu.get("solver_pulse_updates") >= fmu.get("commanded_steps") == sum(r[2] for r in rows)
+    microstep = StepperParameters.from_parameters(preset).microstep_angle_rad
+    error = np.abs(results["pulse_update"] - results["reference"])
+    assert error[:, 0].max() < 5e-4 * microstep
+    assert error[:, 2:4].max() < 2e-5  # A
+    assert (results["pulse_update"][:, 4] == 0).all()  # no step lost
+
+
+def test_pulse_update_and_rk4_lose_the_same_steps() -> None:
+    """The pull-out case of test_loses_steps_beyond_the_pull_out_torque_and_reports_it with both solvers."""
+    preset = load_preset(NEMA17)
+    rates = trapezoid_rates(10 * 200 * 16, ramp_slots=10, hold_slots=20)
+    lost = []
+    for rk4_only in (True, False):
+        with Fmu(ensure_fmu("Stepper", 3), parameters={**preset, "load_inertia": 20 * preset["rotor_inertia"],
+                                                       "rk4_only": rk4_only}) as fmu:
+            drive_slots(fmu, rates)
+            advance(fmu, (len(rates) + 100) * MS)
+            lost.append((fmu.get("lost_steps"), fmu.get("lost_full_steps")))
+    assert lost[0] == lost[1] and lost[0][0] is True
 
 
 # -- switches ---------------------------------------------------------------------------------------

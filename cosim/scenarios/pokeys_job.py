@@ -9,8 +9,8 @@ and axis::
     buffer_level  ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾\\__       kept at ``prefill`` slots, no underrun
 
 With ``steppers`` (default) each axis drives a Stepper FMU (NEMA 17 preset, FMI 3.0) through
-:func:`~cosim.couplings.stepper.couple_stepper`: one ``step_rate`` change per slot at most,
-none while the rate holds.
+:func:`~cosim.couplings.stepper.couple_stepper`: the slots' segments reach it as rows of its
+``step_segments`` input, and it is stepped once per 64 slots or so (figure ``fmu_steps``).
 
 Checks: at most 25 pulses per slot on every axis, pulses at least 40 us apart, the direction set
 up before every pulse, no underrun, and each position counter equal to the pulses emitted, to
