@@ -44,6 +44,9 @@ class DirectionSetup(Check):
         Shortest allowed time from the last direction change to a pulse [ticks], >= 0.
     positive_level : {1, 0}
         The direction level that means a positive pulse (``dir`` 1). Default 1.
+    active_delay : int
+        Ticks from a recorded pulse to its active edge, where the drive counts it (a Trio step
+        output: the step pulse width); the set-up is measured to the active edge. Default 0.
 
     Notes
     -----
@@ -64,9 +67,11 @@ class DirectionSetup(Check):
     direction: str
     setup: int
     positive_level: int = 1
+    active_delay: int = 0
 
     def __post_init__(self) -> None:
         validate.integer(self.setup, "setup", low=0, unit="ticks", kind=TICKS, where=self.where)
+        validate.integer(self.active_delay, "active_delay", low=0, unit="ticks", kind=TICKS, where=self.where)
         validate.integer(self.positive_level, "positive_level", low=0, high=1, allowed="0, 1", kind="an integer",
                          where=self.where)
 
@@ -76,6 +81,7 @@ class DirectionSetup(Check):
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:
         t, d = pulse_times(trace, self.step, self)
+        t = t + self.active_delay
         te, ve = records(trace, self.direction, self)
         level_at = held_index(te, t)
         undefined = level_at < 0

@@ -4,7 +4,8 @@ A controller announces every stretch of evenly spread pulses as one pulse-train 
 ``(t0, duration, count, direction)`` whose pulse k is at ``t0 + (k * duration) // count`` (the
 rule of :mod:`cosim.pulses`): a PoKeys slot, a Trio servo cycle. A stepper plant takes a signed
 ``step_rate`` held from an anchor with its ``step_phase`` and places pulse j at
-``t_anchor + (j - phase) / |rate|``. :func:`couple_stepper` sets, at ``t0``,
+``t_anchor + (j - phase) / |rate|``. :func:`couple_stepper` sets, at ``t0`` (plus the port's
+``active_delay`` where the drive counts a pulse at its active edge, after the recorded instant),
 ``step_rate = +-count / duration`` (phase 0): the plant then puts exactly ``count`` pulses in
 ``[t0, t0 + duration)``, at ``t0 + k * duration / count``, which is the controller's instant plus
 ``(k * duration mod count) / count`` ticks: **less than one tick later**, never in another
@@ -186,7 +187,10 @@ def couple_stepper(port: StepDirPort, plant: PlantLike, *,
     coupling = StepperCoupling(sim, plant, -1 if port.reversed else 1, signal, commanded, wakeups,
                                plant.setter((required(names, "step_rate"),)))
     wakeups.couplings.append(coupling)
-    port.step.subscribe(coupling.on_segment)
+    delay = port.active_delay
+    port.step.subscribe(coupling.on_segment if not delay else  # the drive counts at the active edge
+                        lambda train, t0, duration, count, direction:
+                        coupling.on_segment(train, t0 + delay, duration, count, direction))
     return coupling
 
 
