@@ -128,10 +128,12 @@ class BasicProgram:
         number = _process_number(controller, process)
         self.install(controller)
         run = BasicRun(self, controller, base=base, number=number)
-        for channel in self.compiled.inputs:
-            controller.io.input(channel)
+        for channel in self.compiled.inputs:  # so a machine can drive them from the start; a bad channel is an
+            if 0 <= channel < controller.io.channels:  # error at its line when the program gets there
+                controller.io.input(channel)
         for channel in self.compiled.outputs:
-            controller.io.output(channel)
+            if controller.io.first_output <= channel < controller.io.channels:
+                controller.io.output(channel)
         controller.processes[number] = run
         run.process_handle = controller.sim.process(run.main(controller.sim.now if at is None else at))
         return run

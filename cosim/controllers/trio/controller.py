@@ -130,6 +130,11 @@ class TrioController:
         self.ticks = 0
         sim.process(self.servo_cycle())
 
+    @property
+    def setup_ticks(self) -> int:
+        """Direction set-up before the active edge of a step pulse [ticks]: dir_setup + the pulse width."""
+        return self.dir_setup_ticks + self.pulse_width_ticks
+
     # -- the servo cycle ----------------------------------------------------------------------
     def servo_cycle(self) -> Generator[Event, Any, None]:
         """SimPy process: the servo interrupt at ``k * SERVO_PERIOD``."""
@@ -203,6 +208,8 @@ class TrioController:
             raw = (int(self.sim.rng.integers(0, PWM_ENCODER_MODULUS)) if self.encoder_at_atype is None
                    else self.encoder_at_atype)
             ax.gate.preset_encoder(raw)
+        elif key == "INVERT_STEP":
+            ax.set_invert_step(int(converted))
         elif key == "PWM_CYCLE":
             assert ax.pwm is not None
             ax.pwm.set_cycle(int(converted))

@@ -175,6 +175,7 @@ class Axis:
                                description="step output (ATYPE 1 or 35): each pulse drawn from its leading edge; "
                                            "the step counts at its trailing (active) edge, pulse_width later")
         self.dir = Signal(sim, f"{self.prefix}.dir", kind="bit", description="direction output (1 = positive)")
+        self.invert_out: Signal | None = None
         self.pwm: PwmGenerator | None = None
         self.gate: GateFifo | None = None
         if pwm:
@@ -235,6 +236,15 @@ class Axis:
         """ATYPE was set to 1 or 35: the step and feedback counters start at the demand position."""
         self.steps = floor(self.demand)
         self.feedback.set_value(self.sim.now, self.steps)
+
+    def set_invert_step(self, on: int) -> None:
+        """INVERT_STEP: the step wire idles high and pulses low; the active edge (still the trailing one,
+        at the same instant) is then rising. Shown as ``<axis>.invert_step`` from the first write on."""
+        if self.invert_out is None:
+            self.invert_out = Signal(self.sim, f"{self.prefix}.invert_step", kind="bit",
+                                     description="INVERT_STEP: 1 = the step wire is inverted (its trailing, active "
+                                                 "edge rises); the trace draws pulses high whatever it is")
+        self.invert_out.set(on)
 
     # -- servo cycle --------------------------------------------------------------------------
     def output_cycle(self, t0: int, period: int, demand: Fraction, origin: str = "") -> None:

@@ -160,9 +160,10 @@ class TrioProcess:
         return loaded if loaded is not None else self._done()
 
     def wa(self, ms: object) -> Event:
-        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks)."""
+        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks); the program goes on at HOST priority,
+        after a servo tick at that instant, like every program wake-up."""
         value = validate.positive(ms, "WA time", unit="ms", zero=True)
-        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"))
+        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"), Priority.HOST)
 
     def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
         """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""
