@@ -45,6 +45,8 @@ EXAMPLES = Path(__file__).resolve().parent / "examples"
 MAX_STATEMENTS_PER_INSTANT = 100_000
 #: Deepest GOSUB nesting.
 MAX_GOSUB_DEPTH = 64
+#: Longest console line [characters]; a longer one is written in parts.
+MAX_PRINT_LINE = 10_000
 
 _PARSER = Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 _TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXNUM": "a $hex number",
@@ -214,7 +216,8 @@ class BasicRun:
         self.finished = False
         self.stopped = False
         self.process_handle: simpy.Process | None = None
-        self._printing = ""
+        self._printing: list[str] = []
+        self._printed = 0
 
     @property
     def line(self) -> int:
@@ -287,15 +290,17 @@ class BasicRun:
         return self.gosubs.pop()
 
     def print_text(self, text: str, *, end: bool) -> None:
-        """``PRINT``: add ``text`` to the line; a line is written to the console when it ends."""
-        self._printing += text
-        if end:
+        """``PRINT``: add ``text`` to the line; a line is written to the console when it ends (or reaches
+        :data:`MAX_PRINT_LINE` characters)."""
+        self._printing.append(text)
+        self._printed += len(text)
+        if end or self._printed >= MAX_PRINT_LINE:
             self._flush_print()
 
     def _flush_print(self) -> None:
         self.controller.console.write(process=self.number, program=self.program.name, line=self.line,
-                                      text=self._printing)
-        self._printing = ""
+                                      text="".join(self._printing))
+        self._printing, self._printed = [], 0
 
     def run_program(self, name: str, process: Value | None) -> None:
         """``RUN "NAME"[, process]``: start another program the controller knows."""

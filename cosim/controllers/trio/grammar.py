@@ -51,8 +51,8 @@ _args: expr (_COMMA expr)*
 ?and_expr: not_expr (LOGIC_AND not_expr)*
 ?not_expr: _NOT not_expr -> not_op
          | comparison
-?comparison: sum CMP sum -> compare
-           | sum _EQ sum -> equal
+?comparison: comparison CMP sum -> compare
+           | comparison _EQ sum -> equal
            | sum
 ?sum: term (ADD term)*
 ?term: factor (MUL factor)*
