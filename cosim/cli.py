@@ -1,7 +1,9 @@
 """The ``cosim`` command line.
 
 Exit status: 0 when every check passed, 1 when a check failed or a run broke, 2 for usage or
-configuration errors (a parameter out of range, an unknown scenario, a broken script).
+configuration errors (a parameter out of range, an unknown scenario, a broken script), 3 when a
+plant FMU ended the run early (verdict TERMINATED: not a failure of the checks, which all passed
+up to that instant).
 
 Each sub-command is two small functions, ``_args_<name>(parser)`` (its arguments) and
 ``cmd_<name>(args) -> exit status``, and one line in :data:`COMMANDS`. Command functions import
@@ -16,11 +18,14 @@ import sys
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from cosim import __version__
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
 
-EXIT_PASS, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
+EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED = 0, 1, 2, 3
+EPILOG = ("Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error, "
+          "3 a plant FMU ended the run early (TERMINATED; the checks up to then passed).")
 #: How many failing sweep runs are listed with their reason before the rest is only counted.
 SHOWN_FAILURES = 5
 
@@ -36,7 +41,8 @@ def _scenario_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
         "zsh": f"({names})",
         "tcsh": f"({names})",
         "preamble": {"bash": (f'_cosim_scenarios() {{\n  compgen -W "{names}" -- "$1"\n'
-                              '  compgen -f -X "!*.py" -- "$1"\n  compgen -d -- "$1"\n}\n')},
+                              '  compgen -f -X "!*.py" -- "$1"\n  compgen -f -X "!*.toml" -- "$1"\n'
+                              '  compgen -d -- "$1"\n}\n')},
     }
 
 
@@ -47,9 +53,13 @@ def _folder_completion(action: argparse.Action) -> None:
 # -- run ------------------------------------------------------------------------------------------
 
 def _args_run(parser: argparse.ArgumentParser) -> None:
-    _scenario_argument(parser, "bundled scenario name (see `cosim list`) or path to a .py script")
+    _scenario_argument(parser, "bundled scenario name (see `cosim list`), a .py scenario script, a .toml machine "
+                               "file, or a program (.bas) to run on --machine")
+    parser.add_argument("--machine", type=Path, default=None, metavar="MACHINE.toml",
+                        help="the machine file a program given as SCENARIO runs on (its [[program]] list is replaced)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
-                        help="set a declared parameter (repeatable; see `cosim params SCENARIO`)")
+                        help="set a declared parameter, or a machine-file key by its dotted path or a unique "
+                             "last part (repeatable; see `cosim params SCENARIO`)")
     _folder_completion(parser.add_argument("--out", type=Path, default=None,
                                            help="results folder (default: results/<scenario>)"))
     parser.add_argument("--seed", type=int, default=0, help="random seed (default 0): same seed, same trace")
@@ -69,31 +79,68 @@ def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
     return values
 
 
+def _load(args: argparse.Namespace) -> object:
+    """The scenario or machine to run: a name, a .py script, a .toml machine, or a program on --machine."""
+    from cosim.catalog import load
+
+    machine = getattr(args, "machine", None)
+    if machine is not None:
+        from cosim.machine import load_machine
+
+        return load_machine(machine, program=args.scenario)
+    if Path(args.scenario).suffix in (".bas", ".pmc", ".nc", ".ngc"):
+        raise ConfigurationError(f"{args.scenario} is a program: name the machine it runs on with "
+                                 f"--machine MACHINE.toml (see docs/machines.md)")
+    return load(args.scenario)
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from cosim.runner import run_scenario
-    from cosim.scenario import load
+    from cosim.scenario import ScenarioFile
 
-    scenario = load(args.scenario)
+    scenario = _load(args)
+    assert isinstance(scenario, ScenarioFile)
     out = args.out or Path("results") / scenario.name
     formats = (() if args.no_vcd else ("vcd",)) + (args.format,)
     result = run_scenario(scenario, overrides=_parse_sets(args.overrides), seed=args.seed, until=args.until,
                           out=out, formats=formats, progress=True)
     print(result.table())
     print(f"results in {out}/ (result.json, {'trace.vcd, ' if not args.no_vcd else ''}{args.format} tables)")
+    return _exit_status(result)
+
+
+def _exit_status(result: Any) -> int:
     if result.error_kind == "configuration":
         return EXIT_USAGE
-    return EXIT_PASS if result.verdict == "PASS" else EXIT_FAIL
+    return {"PASS": EXIT_PASS, "TERMINATED": EXIT_TERMINATED}.get(result.verdict, EXIT_FAIL)
+
+
+def _args_check_machine(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("machine", type=Path, help="the machine file (.toml)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="set a machine-file key first (as for `cosim run`)")
+
+
+def cmd_check_machine(args: argparse.Namespace) -> int:
+    from cosim.machine import load_machine
+    from cosim.machine.check import check_machine
+
+    machine = load_machine(args.machine)
+    print(check_machine(machine, overrides=_parse_sets(args.overrides)))
+    return EXIT_PASS
 
 
 # -- list, params ---------------------------------------------------------------------------------
 
 def cmd_list(args: argparse.Namespace) -> int:
-    from cosim.scenario import bundled, description
+    from cosim.catalog import description, examples, shown
+    from cosim.scenario import bundled
 
-    names = bundled()
-    width = max((len(n) for n in names), default=0)
-    for name in names:
-        print(f"{name:<{width}}  {description(name)}")
+    rows = [(name, description(name)) for name in bundled()]
+    rows += [(shown(path), description(path)) for path in examples()]
+    width = max((len(n) for n, _ in rows), default=0)
+    for name, text in rows:
+        print(f"{name:<{width}}  {text}")
     return EXIT_PASS
 
 
@@ -102,7 +149,7 @@ def _args_params(parser: argparse.ArgumentParser) -> None:
 
 
 def cmd_params(args: argparse.Namespace) -> int:
-    from cosim.scenario import load
+    from cosim.catalog import load
 
     scenario = load(args.scenario)
     print(f"{scenario.name}: {scenario.description}\n(default end time {scenario.until})")
@@ -161,6 +208,51 @@ def cmd_check(args: argparse.Namespace) -> int:
     return EXIT_FAIL if bad else EXIT_PASS
 
 
+def _args_fmu_info(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("fmu", type=Path, help="the .fmu file")
+    parser.add_argument("--json", action="store_true", help="print everything as JSON")
+
+
+def cmd_fmu_info(args: argparse.Namespace) -> int:
+    from cosim.fmutools import fmu_info, format_info
+
+    info = fmu_info(args.fmu)
+    if args.json:
+        from cosim.runner import to_json
+
+        print(to_json(info.as_dict()))
+    else:
+        print(format_info(info), end="")
+    return EXIT_PASS
+
+
+def _args_run_fmu(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("fmu", type=Path, help="the .fmu file (co-simulation, FMI 2.0 or 3.0)")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
+                        help="start value of a parameter or input (repeatable; arrays: 1,2,3; enumerations: "
+                             "the item name; binaries: hex)")
+    parser.add_argument("--until", default=None,
+                        help="end time with unit, e.g. '2 s' (default: the FMU's default experiment, else 1 s)")
+    parser.add_argument("--step", default=None,
+                        help="output grid with unit, e.g. '1 ms' (default: the default experiment's step size, "
+                             "else 1/500 of the run)")
+    _folder_completion(parser.add_argument("--out", type=Path, default=None,
+                                           help="results folder (default results/<fmu name>)"))
+    parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
+                        help="format of the trace tables (default parquet)")
+
+
+def cmd_run_fmu(args: argparse.Namespace) -> int:
+    from cosim.fmutools import plant_name, run_fmu
+
+    out = args.out or Path("results") / plant_name(args.fmu)
+    result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, out=out,
+                     formats=("vcd", args.format), progress=True)
+    print(result.table())
+    print(f"results in {out}/ (result.json, trace.vcd, {args.format} tables: every numeric output on the grid)")
+    return _exit_status(result)
+
+
 # -- sweep ----------------------------------------------------------------------------------------
 
 def _args_sweep(parser: argparse.ArgumentParser) -> None:
@@ -182,7 +274,7 @@ def _args_sweep(parser: argparse.ArgumentParser) -> None:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     from cosim import sweep, sweep_report
-    from cosim.scenario import load
+    from cosim.catalog import load
 
     scenario = load(args.scenario)
     runs = sweep.plan(args.scenario, grid=sweep.parse_grid(args.grid), random=sweep.parse_random(args.random),
@@ -262,10 +354,19 @@ class Command:
 
 
 COMMANDS: tuple[Command, ...] = (
-    Command("run", cmd_run, "run one scenario and check its timing", arguments=_args_run,
-            description="Run a bundled scenario (by name) or your own script (a .py path), print the check "
-                        "table and write result.json, trace.vcd and tables."),
-    Command("list", cmd_list, "list the bundled scenarios with their one-line descriptions"),
+    Command("run", cmd_run, "run one scenario or machine file and check its timing", arguments=_args_run,
+            description="Run a bundled scenario (by name), your own script (a .py path) or a machine file (.toml; "
+                        "with --machine, a program on a machine), print the check table and write result.json, "
+                        "trace.vcd and tables.",
+            epilog="examples: cosim run laser_pwm --set pwm_on=200; cosim run examples/pokeys_mill/mill.toml "
+                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml. "
+                   + EPILOG),
+    Command("check-machine", cmd_check_machine, "check a machine file: build the machine without running it",
+            arguments=_args_check_machine,
+            description="Read MACHINE.toml, check every key, load its programs and FMUs and join the couplings, "
+                        "without simulating: errors name the file and the key (or the program's line), with the "
+                        "allowed values. Exit 0 when the machine can run, 2 when it cannot."),
+    Command("list", cmd_list, "list the bundled scenarios and example machines with their descriptions"),
     Command("params", cmd_params, "show a scenario's parameters (name, default, unit, range, help)",
             arguments=_args_params),
     Command("build-fmus", cmd_build, "build the plant FMUs (FMI 2.0 and 3.0); says what it built and where",
@@ -274,6 +375,20 @@ COMMANDS: tuple[Command, ...] = (
                         "In a source checkout they go to models/; an installed cosim keeps them in a per-user "
                         "cache. Prints one line per FMU and where they are."),
     Command("check-fmus", cmd_check, "validate the built FMUs with fmpy's validator (builds missing ones first)"),
+    Command("fmu-info", cmd_fmu_info, "what is in an FMU: variables, units, ranges, and the couplings it can serve",
+            arguments=_args_fmu_info,
+            description="Read an FMU file (nothing is run): FMI version, interfaces, every variable (type, "
+                        "causality, variability, unit, start, range, dimensions), default experiment, the "
+                        "platforms it has binaries for, and for each coupling whether its roles are found "
+                        "under the bundled FMUs' names or which ones to map with variables={role: name}."),
+    Command("run-fmu", cmd_run_fmu, "simulate one FMU alone (like fmpy's simulate_fmu) into a result folder",
+            arguments=_args_run_fmu,
+            description="Simulate one co-simulation FMU with the master, start values from --set, every "
+                        "numeric output recorded on a grid (0, step, 2 step, ... and the end), and write the "
+                        "usual result folder (result.json, trace.vcd, tables). An FMU that asks to end the "
+                        "simulation ends the run there (verdict TERMINATED, exit status 3).",
+            epilog="example: cosim run-fmu models/fmi3/Stepper.fmu --set step_rate=2000 --until '50 ms' "
+                   "--step '1 ms'"),
     Command("sweep", cmd_sweep, "run a scenario over a parameter grid and/or seeded random samples, on Dask",
             arguments=_args_sweep,
             description="Run SCENARIO for every combination of --grid values, times --samples random draws of "
@@ -300,7 +415,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="cosim",
         description="Co-simulation workbench for motion-controller timing: run scenarios, check timing, "
                     "sweep parameters, build and validate the plant FMUs.",
-        epilog="Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error.",
+        epilog=EPILOG,
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)

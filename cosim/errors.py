@@ -59,6 +59,37 @@ class FmuError(CosimError):
         super().__init__(text)
 
 
+class PlantTerminated(CosimError):
+    """A plant FMU asked to end the simulation (FMI 2.0 Discard / fmi2Terminated, FMI 3.0 terminateSimulation).
+
+    Not a failure: the run ends at that instant with verdict TERMINATED (see :mod:`cosim.runner`).
+
+    Parameters
+    ----------
+    message : str
+        What happened, naming the plant and the FMU file.
+    plant : str
+        The plant's (instance) name.
+    fmu : str
+        The FMU file's name.
+    t : int
+        The tick at which the plant ended the simulation [ticks].
+    reason : str
+        How the FMU asked (which call, at which FMU time).
+    log : sequence of str
+        The FMU's last log messages (most recent last).
+    """
+
+    def __init__(self, message: str, plant: str = "", fmu: str = "", t: int = 0, reason: str = "",
+                 log: Sequence[str] = ()) -> None:
+        # every field in args: SimPy re-raises a failed process's exception as type(exc)(*exc.args)
+        super().__init__(message, plant, fmu, t, reason, tuple(log))
+        self.message, self.plant, self.fmu, self.t, self.reason, self.log = message, plant, fmu, t, reason, tuple(log)
+
+    def __str__(self) -> str:
+        return self.message + ("\nFMU log:\n  " + "\n  ".join(self.log[-20:]) if self.log else "")
+
+
 class TimingViolation(CosimError):
     """A controller rule was broken at run time in a way the model cannot continue from."""
 

@@ -1,51 +1,94 @@
 """The FMU adapter: the one module that imports fmpy.
 
 :class:`Fmu` loads an FMI 2.0 or 3.0 co-simulation FMU, resolves variable names once, offers
-typed get/set by name, and advances the FMU to an integer tick: the step size is computed from
-integer time here, at the FMI boundary, and nowhere else. FMI errors become :class:`FmuError`
-carrying the FMU's own log messages. On FMI 3.0, early return and event mode are used when the
-FMU offers them, so :meth:`Fmu.advance_to` can stop exactly at an event inside a step.
+typed get/set by name for every variable type and for arrays (see :mod:`cosim.fmuvars`), and
+advances the FMU to an integer tick: the step size is computed from integer time here, at the FMI
+boundary, and nowhere else. FMI errors become :class:`FmuError` carrying the FMU's own log
+messages. On FMI 3.0, early return and event mode are used when the FMU offers them, so
+:meth:`Fmu.advance_to` can stop exactly at an event inside a step.
+
+An FMU that asks to end the simulation (FMI 2.0: ``fmi2Discard`` from ``doStep``, with
+``fmi2Terminated``; FMI 3.0: ``terminateSimulation`` from ``doStep`` or in event mode) is
+terminated at that instant and :class:`~cosim.errors.PlantTerminated` is raised with the tick, the
+reason and the FMU's last log messages; the instance is freed by :meth:`Fmu.close`.
+
+Model Exchange FMUs are refused with a message saying how to get a co-simulation one: cosim steps
+FMUs exactly to the instants that matter, which needs the FMU's own solver.
 """
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import difflib
 import shutil
 import tempfile
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
 from fmpy import extract, fmi2, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.fmi3 import FMU3Slave
 
-from cosim import validate
-from cosim.errors import ConfigurationError, FmuError
+from cosim.errors import ConfigurationError, CosimError, FmuError, PlantTerminated
+from cosim.fmuvars import Value, Variable, accessors
 from cosim.timebase import TimeBase
 
-Value = float | int | bool
+__all__ = ["Fmu", "Value", "Variable", "read_description"]
 
 _STATUS = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
 
 
-class _Variable:
-    """A resolved variable: value reference plus typed accessors."""
+def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
+    """The model description of an FMU file (fmpy's), or :class:`FmuError` saying what is wrong with it.
 
-    __slots__ = ("causality", "get", "name", "set", "type", "unit", "variability", "vr")
+    Unless ``cosimulation`` is false, an FMU without co-simulation (Model Exchange only) is refused
+    with :class:`ConfigurationError` saying how to export a co-simulation FMU instead.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise ConfigurationError(f"FMU file {path} does not exist")
+    try:
+        model = read_model_description(str(path))
+    except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
+        raise FmuError(f"{path}: cannot read modelDescription.xml ({type(exc).__name__}: {exc}); "
+                       "`python -m fmpy validate` on the file lists what is wrong with it") from exc
+    if cosimulation and model.coSimulation is None:
+        kinds = "Model Exchange" if model.modelExchange is not None else "no co-simulation"
+        raise ConfigurationError(
+            f"{path.name} is a {kinds} FMU: cosim needs a co-simulation FMU (one that brings its own "
+            "solver, so the master can step it exactly to each instant that matters). Export it again "
+            "with co-simulation enabled: most tools have it as the FMU type (OpenModelica: "
+            "buildModelFMU(..., fmuType=\"cs\") or \"me_cs\"; Dymola: 'Co-simulation using Cvode' or "
+            "'using Dymola solvers'; Simulink and 20-sim: their co-simulation FMU export). For a quick "
+            "look at a Model Exchange FMU alone, fmpy.simulate_fmu runs it with its own solver.")
+    _read_unsigned_ranges(path, model)
+    return model
 
-    def __init__(self, name: str, vr: int, type_: str, causality: str, variability: str, unit: str) -> None:
-        self.name = name
-        self.vr = vr
-        self.type = type_
-        self.causality = causality
-        self.variability = variability
-        self.unit = unit
-        self.get: Callable[[], Value] = lambda: 0
-        self.set: Callable[[Value], None] = lambda value: None
+
+def _read_unsigned_ranges(path: Path, model: Any) -> None:
+    """Fill in ``min``/``max`` of FMI 3.0 UInt variables, which fmpy's reader leaves out."""
+    unsigned = {v.name: v for v in model.modelVariables if v.type.startswith("UInt") and v.min is None
+                and v.max is None}
+    if not unsigned:
+        return
+    import zipfile
+    from xml.etree import ElementTree
+
+    try:
+        text = ((path / "modelDescription.xml").read_bytes() if path.is_dir()
+                else zipfile.ZipFile(path).read("modelDescription.xml"))
+        root = ElementTree.fromstring(text)
+    except (OSError, KeyError, zipfile.BadZipFile, ElementTree.ParseError):
+        return
+    for element in root.iterfind("ModelVariables/*"):
+        sv = unsigned.get(element.get("name", ""))
+        if sv is not None:
+            sv.min, sv.max = element.get("min"), element.get("max")
 
 
 class Fmu:
@@ -60,11 +103,18 @@ class Fmu:
     instance_name : str
         Name used in log messages and errors.
     parameters : mapping, optional
-        Start values of parameters and inputs, set before initialisation.
+        Start values of parameters and inputs, set before initialisation (checked as :meth:`set` does).
     start : int
         Start time [ticks].
     logging : bool
         Ask the FMU for debug logging (errors are always captured).
+
+    Attributes
+    ----------
+    variables : dict of str to Variable
+        Every variable the adapter reaches (all types but clocks), with type, unit, range, shape.
+    terminated : str or None
+        Why the FMU ended the simulation, once it has (it then stays at :attr:`t`).
 
     Examples
     --------
@@ -83,26 +133,24 @@ class Fmu:
         self.log: deque[str] = deque(maxlen=200)
         self.t = start
         self.events = 0
+        self.terminated: str | None = None
+        self._ended: CosimError | None = None  # why it cannot step any more: terminated or closed
         self._unzipdir: str | None = None
         self._fmu: Any = None
-        if not self.path.exists():
-            raise ConfigurationError(f"FMU file {self.path} does not exist")
-        try:
-            self.model = read_model_description(str(self.path))
-        except Exception as exc:  # fmpy raises plain exceptions for broken XML
-            raise FmuError(f"{self.path}: cannot read modelDescription.xml: {exc}") from exc
-        if self.model.coSimulation is None:
-            raise ConfigurationError(f"{self.path} is not a co-simulation FMU")
+        self.model = read_description(self.path)
         self.fmi_version = 3 if self.model.fmiVersion.startswith("3") else 2
+        self._where = f"{instance_name} ({self.path.name})"
         self._unzipdir = tempfile.mkdtemp(prefix="cosim-fmu-")
         extract(str(self.path), unzipdir=self._unzipdir)
         cs = self.model.coSimulation
         self.early_return = self.fmi_version == 3 and bool(cs.mightReturnEarlyFromDoStep)
         self.event_mode = self.fmi_version == 3 and bool(cs.hasEventMode)
-        self.variables: dict[str, _Variable] = {}
+        self.variables: dict[str, Variable] = {}
         self._instantiate(logging)
         self._resolve()
-        self._call("initialise", self._initialise, dict(parameters or {}))
+        values = {name: self.variable(name).check(value, where=self._where)
+                  for name, value in (parameters or {}).items()}
+        self._call("initialise", self._initialise, values)
         self._prepare_step()
 
     # -- setup ------------------------------------------------------------------------------
@@ -146,34 +194,39 @@ class Fmu:
 
     def _resolve(self) -> None:
         for sv in self.model.modelVariables:
-            unit = sv.unit or (sv.declaredType.unit if sv.declaredType is not None else "") or ""
-            var = _Variable(sv.name, sv.valueReference, sv.type, sv.causality, sv.variability, unit)
-            accessors = self._accessors(sv.type, [sv.valueReference])
-            if accessors is None:
-                continue
-            var.get, var.set = accessors
-            self.variables[sv.name] = var
+            var = Variable.from_model(sv, self.fmi_version)
+            if var is not None:
+                var.get, var.set = self._accessors(var)
+                self.variables[var.name] = var
 
-    def _accessors(self, type_: str, vr: list[int]) -> tuple[Callable[[], Value],
-                                                            Callable[[Value], None]] | None:
-        f = self._fmu
-        v2 = self.fmi_version == 2
-        if type_ in ("Real", "Float64"):
-            get_real = f.getReal if v2 else f.getFloat64
-            set_real = f.setReal if v2 else f.setFloat64
-            return (lambda: float(get_real(vr)[0])), (lambda value: set_real(vr, [float(value)]))
-        if type_ in ("Integer", "Int32", "Enumeration"):
-            get_int = f.getInteger if v2 else f.getInt32
-            set_int = f.setInteger if v2 else f.setInt32
-            return (lambda: int(get_int(vr)[0])), (lambda value: set_int(vr, [int(value)]))
-        if type_ == "Boolean":
-            return (lambda: bool(f.getBoolean(vr)[0])), (lambda value: f.setBoolean(vr, [bool(value)]))
-        return None
+    def _function(self, name: str) -> Callable[..., int]:
+        """The FMI function ``name`` taking ctypes arguments and returning its status."""
+        raw = self._raw(name)
+        if raw is not None:
+            return raw
+        wrapped = getattr(self._fmu, name)
 
-    def _initialise(self, parameters: dict[str, Value]) -> None:
+        def call(*args: Any) -> int:
+            try:
+                wrapped(*args)
+            except FMICallException as exc:
+                return int(exc.status)
+            return 0
+
+        return call
+
+    def _failed(self, what: str, status: int) -> FmuError:
+        return FmuError(f"{self._where} at t={self.t} ticks: {what} failed with status "
+                        f"{_STATUS.get(status, status)}", self.log)
+
+    def _accessors(self, var: Variable) -> tuple[Callable[[], Value], Callable[[Any], None]]:
+        prefix = f"fmi{self.fmi_version}"
+        return accessors(var, self._function(f"{prefix}Get{var.kind.function}"),
+                         self._function(f"{prefix}Set{var.kind.function}"), component=self._fmu.component,
+                         fmi3=self.fmi_version == 3, failed=self._failed)
+
+    def _initialise(self, parameters: dict[str, Any]) -> None:
         t0 = self.timebase.seconds(self.t)
-        for name, value in parameters.items():
-            self._check_value(self.variable(name), value)
         if self.fmi_version == 2:
             self._fmu.setupExperiment(startTime=t0)
             for name, value in parameters.items():
@@ -186,11 +239,12 @@ class Fmu:
             self._fmu.enterInitializationMode(startTime=t0)
             self._fmu.exitInitializationMode()
             if self.event_mode:
-                self._settle_events()
+                if self._settle_events():
+                    self._end(self.t, "asked to terminate in event mode during initialisation")
                 self._fmu.enterStepMode()
 
     # -- access -----------------------------------------------------------------------------
-    def variable(self, name: str) -> _Variable:
+    def variable(self, name: str) -> Variable:
         """The resolved variable ``name``; unknown names raise with the closest matches."""
         try:
             return self.variables[name]
@@ -201,25 +255,24 @@ class Fmu:
                 f"{self.instance_name} ({self.path.name}) has no variable named {name!r}{hint}"
             ) from None
 
-    @staticmethod
-    def _check_value(var: _Variable, value: Value) -> None:
-        if var.type == "Boolean" and not isinstance(value, bool | int):
-            raise ConfigurationError(f"{var.name} is Boolean; got {value!r}")
-        if var.type in ("Integer", "Int32"):  # an Int32 never wraps: 2**32 + 1000 is refused, not stored as 1000
-            validate.integer(value, var.name, low=-(2**31), high=2**31 - 1, whole=True, kind="an integer",
-                             allowed=f"{-(2**31)}..{2**31 - 1} (Int32)")
-
     def get(self, name: str) -> Value:
-        """Current value of variable ``name`` (the FMU is not advanced; see the master)."""
-        var = self.variable(name)
-        value: Value = self._call(f"get {name}", var.get)
-        return value
+        """Current value of variable ``name`` (the FMU is not advanced; see the master).
 
-    def set(self, name: str, value: Value) -> None:
-        """Set variable ``name``; an FMU that rejects it raises :class:`FmuError` with its message."""
+        A scalar as ``float``, ``int``, ``bool``, ``str`` or ``bytes``; an array variable as a numpy
+        array of its shape.
+        """
+        return self.variable(name).get()
+
+    def set(self, name: str, value: Any) -> None:
+        """Set variable ``name``.
+
+        The value is checked first (:meth:`Variable.check`): an integer outside its type's range or
+        the variable's declared ``min``/``max`` raises :class:`ConfigurationError` naming the value
+        and the range, and never reaches the FMU. A value the FMU refuses raises :class:`FmuError`
+        with the FMU's own message.
+        """
         var = self.variable(name)
-        self._check_value(var, value)
-        self._call(f"set {name} = {value!r}", var.set, value)
+        var.set(var.check(value, where=self._where))
 
     def _call(self, what: str, fn: Callable[..., Any], *args: Any) -> Any:
         try:
@@ -260,22 +313,45 @@ class Fmu:
         event, terminate, early, last = self._fmu.doStep(t_s, h_s)
         return 0, event, terminate, early, last
 
-    def _step(self, t_s: float, h_s: float) -> tuple[bool, bool, bool, float]:
+    def _step(self, t_s: float, h_s: float) -> tuple[bool, str, bool, float]:
+        """One doStep: (event, why the FMU asks to terminate or "", early return, last successful time [s])."""
         try:
             status, event, terminate, early, last = self._do_step(t_s, h_s)
         except FMICallException as exc:
             status, event, terminate, early, last = exc.status, False, False, False, t_s
+        if status == 2:  # Discard: the FMU could not (or would not) go on
+            return False, self._discarded(t_s, h_s, last), False, self._last_successful(last)
         if status > 1:
             raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: doStep from {t_s!r} s "
                            f"by {h_s!r} s failed with status {_STATUS.get(status, status)}", self.log)
-        return event, terminate, early, last
+        why = f"asked to terminate from doStep at t={last!r} s" if terminate else ""
+        return event, why, early, last
+
+    def _discarded(self, t_s: float, h_s: float, last: float) -> str:
+        reason = f"doStep from {t_s!r} s by {h_s!r} s returned Discard"
+        if self.fmi_version == 2:
+            try:
+                asked = bool(self._fmu.getBooleanStatus(fmi2Terminated))
+            except FMICallException:
+                asked = False
+            return reason + (" (fmi2Terminated: the FMU asks to end the simulation)" if asked else "")
+        return reason + f" (last successful time {last!r} s)"
+
+    def _last_successful(self, last: float) -> float:
+        """FMI 2.0 after Discard: fmi2LastSuccessfulTime (the step's start if the FMU cannot say)."""
+        if self.fmi_version == 3:
+            return last
+        try:
+            return float(self._fmu.getRealStatus(fmi2LastSuccessfulTime))
+        except FMICallException:
+            return self.timebase.seconds(self.t)
 
     def reader(self, names: list[str]) -> Callable[[], list[Value]]:
-        """A function returning the current values of ``names`` (one FMI call when all are Float64)."""
+        """A function returning the current values of ``names`` (one FMI call when all are Float64 scalars)."""
         variables = [self.variable(name) for name in names]
         get = self._raw("fmi2GetReal" if self.fmi_version == 2 else "fmi3GetFloat64")
-        if get is None or not variables or any(v.type not in ("Real", "Float64") for v in variables):
-            return lambda: [self._call(f"get {v.name}", v.get) for v in variables]
+        if get is None or not variables or any(v.kind.name != "Float64" or v.shape for v in variables):
+            return lambda: [v.get() for v in variables]
         n = len(variables)
         vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
         values = (ctypes.c_double * n)()
@@ -291,15 +367,15 @@ class Fmu:
         return read
 
     def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
-        """A function setting ``names`` (all Float64/Real inputs) to its argument's values in one FMI call.
+        """A function setting ``names`` (all Float64/Real scalar inputs) to its argument's values in one FMI call.
 
         The hot path of couplings that change an input every slot. A value the FMU refuses raises
         :class:`FmuError` with the FMU's own message (which names the variable and its range).
         """
         variables = [self.variable(name) for name in names]
-        if not variables or any(v.type not in ("Real", "Float64") for v in variables):
+        if not variables or any(v.kind.name != "Float64" or v.shape for v in variables):
             raise ConfigurationError(f"{self.instance_name}: writer() takes Float64 variables only; got "
-                                     + ", ".join(f"{v.name} ({v.type})" for v in variables))
+                                     + ", ".join(f"{v.name} ({v.type}{v.dimensions})" for v in variables))
         put = self._raw("fmi2SetReal" if self.fmi_version == 2 else "fmi3SetFloat64")
         if put is None:
             def write_each(values: Sequence[float]) -> None:
@@ -333,7 +409,15 @@ class Fmu:
         With FMI 3.0 early return, the FMU may stop at an event before ``t``: the adapter then
         handles the event (event mode when the FMU has it), steps on to the first whole tick at
         or after the event instant, and returns that tick (< ``t``). Otherwise returns ``t``.
+
+        Raises
+        ------
+        PlantTerminated
+            The FMU asked to end the simulation in this step (or did so before): it is terminated
+            at the first whole tick at or after that instant, which the exception carries.
         """
+        if self._ended is not None:
+            raise self._ended
         if t == self.t:
             return t
         if t < self.t:
@@ -341,45 +425,69 @@ class Fmu:
         t_from = self.timebase.seconds(self.t)
         h = self.timebase.seconds(t - self.t)
         event, terminate, early, t_last = self._step(t_from, h)
+        t_event = min(max(self.timebase.ticks_from_seconds_ceil(t_last), self.t), t) if early or terminate else t
+        if terminate:
+            self._end(t_event, terminate)
         if self.fmi_version == 2:
             self.t = t
             return t
-        if terminate:
-            raise FmuError(f"{self.instance_name} asked to terminate at t={t_last} s", self.log)
-        if event and self.event_mode:
-            self._call("event mode", self._handle_event)
+        if event and self.event_mode and self._call("event mode", self._handle_event):
+            self._end(t_event, f"asked to terminate in event mode at t={t_last!r} s")
         if not early:
             self.t = t
             return t
         self.events += 1
-        t_event = min(max(self.timebase.ticks_from_seconds_ceil(t_last), self.t), t)
         gap = self.timebase.seconds(t_event) - t_last
         if gap > 0:
-            self._step(t_last, gap)
+            event, terminate, _, _ = self._step(t_last, gap)
+            if terminate:
+                self._end(t_event, terminate)
         self.t = t_event
         return t_event
 
-    def _handle_event(self) -> None:
+    def _handle_event(self) -> bool:
+        """Event mode at the FMU's current instant; True if the FMU asks to terminate there."""
         self._fmu.enterEventMode()
-        self._settle_events()
+        if self._settle_events():
+            return True
         self._fmu.enterStepMode()
+        return False
 
-    def _settle_events(self) -> None:
+    def _settle_events(self) -> bool:
         for _ in range(100):
             needed, terminate, *_rest = self._fmu.updateDiscreteStates()
             if terminate:
-                raise FmuError(f"{self.instance_name} asked to terminate in event mode", self.log)
+                return True
             if not needed:
-                return
+                return False
         raise FmuError(f"{self.instance_name}: discrete states did not settle after 100 iterations", self.log)
+
+    def _end(self, t: int, reason: str) -> None:
+        """The FMU asked to end the simulation at tick ``t``: terminate it there and raise PlantTerminated."""
+        self.t = t
+        self.terminated = reason
+        with contextlib.suppress(FMICallException):  # the FMU's own message is in the log
+            self._fmu.terminate()
+        ended = PlantTerminated(f"{self._where} {reason}; it is terminated at t={t} ticks",
+                                plant=self.instance_name, fmu=self.path.name, t=t, reason=reason, log=tuple(self.log))
+        self._ended = ended
+        raise ended
 
     # -- teardown ---------------------------------------------------------------------------
     def close(self) -> None:
-        """Terminate and free the instance and remove its unzipped folder (idempotent)."""
+        """Terminate (unless the FMU ended the simulation itself) and free the instance, remove its folder.
+
+        Idempotent.
+        """
         fmu, self._fmu = self._fmu, None
         if fmu is not None:
+            closed = FmuError(f"{self._where} is closed (its simulation has ended)")
+            self._ended = closed
+            for var in self.variables.values():  # the prepared calls hold the freed instance: refuse them
+                var.get = var.set = partial(_refuse, closed)
             try:
-                fmu.terminate()
+                if self.terminated is None:
+                    fmu.terminate()
             except FMICallException:
                 pass
             finally:
@@ -400,3 +508,6 @@ class Fmu:
     def __del__(self) -> None:
         self.close()
 
+
+def _refuse(error: Exception, *args: Any) -> Any:
+    raise error

@@ -4,6 +4,12 @@ One table per plant gives its variables once; from it come the C declarations th
 FMI wrappers share (``model_vars.h`` and ``model_vars.c``), the FMI 2.0 and FMI 3.0
 ``modelDescription.xml`` and the FMI 3.0 ``buildDescription.xml``. Value references follow the
 table's order (``time`` is 0), so the C code and both XML files cannot disagree.
+
+Every FMI 3.0 variable type can be declared (``Float32``, ``Float64``, ``Int8`` .. ``UInt64``,
+``Boolean``, ``String``, ``Binary``, ``Enumeration`` with ``declared_type`` naming one of the
+``[enumerations]`` table), numeric and Boolean variables also as arrays (``dimensions = [2, 3]``).
+The FMI 2.0 model description holds the subset FMI 2.0 has: scalar Float64 (Real), Int32 (Integer),
+Boolean, String and Enumeration variables; the others exist in the FMI 3.0 build only.
 """
 
 from __future__ import annotations
@@ -47,8 +53,22 @@ UNITS: dict[str, tuple[dict[str, int], float]] = {
     "V/V": ({}, 1.0),         # a voltage gain (dimensionless)
 }
 
-_TYPES = {"Float64": ("double", "VT_FLOAT64", "Real"), "Int32": ("int32_t", "VT_INT32", "Integer"),
-          "Boolean": ("int", "VT_BOOL", "Boolean")}
+#: Each type of model.toml: its C storage, its VarType constant, its FMI 2.0 element (None: FMI 3.0 only).
+_TYPES: dict[str, tuple[str, str, str | None]] = {
+    "Float64": ("double", "VT_FLOAT64", "Real"), "Float32": ("float", "VT_FLOAT32", None),
+    "Int8": ("int8_t", "VT_INT8", None), "UInt8": ("uint8_t", "VT_UINT8", None),
+    "Int16": ("int16_t", "VT_INT16", None), "UInt16": ("uint16_t", "VT_UINT16", None),
+    "Int32": ("int32_t", "VT_INT32", "Integer"), "UInt32": ("uint32_t", "VT_UINT32", None),
+    "Int64": ("int64_t", "VT_INT64", None), "UInt64": ("uint64_t", "VT_UINT64", None),
+    "Boolean": ("int", "VT_BOOL", "Boolean"), "String": ("char", "VT_STRING", "String"),
+    "Binary": ("CfBinary", "VT_BINARY", None), "Enumeration": ("int64_t", "VT_ENUM", "Enumeration"),
+}
+#: The value range of each integer type (an Enumeration is stored as Int64).
+INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    **{f"Int{bits}": (-(2 ** (bits - 1)), 2 ** (bits - 1) - 1) for bits in (8, 16, 32, 64)},
+    **{f"UInt{bits}": (0, 2**bits - 1) for bits in (8, 16, 32, 64)},
+}
+_FLOATS = ("Float32", "Float64")
 _CAUSALITIES = {"parameter": "CA_PARAMETER", "calculatedParameter": "CA_CALCULATED_PARAMETER",
                 "input": "CA_INPUT", "output": "CA_OUTPUT", "local": "CA_LOCAL"}
 LOG_CATEGORIES = ("logStatusWarning", "logStatusError", "logEvents")
@@ -69,6 +89,9 @@ class Variable:
     max: float | None = None
     positive: bool = False
     tunable: bool = False
+    dimensions: tuple[int, ...] = ()
+    declared_type: str = ""
+    items: tuple[str, ...] = ()
 
     @property
     def variability(self) -> str:
@@ -76,7 +99,24 @@ class Variable:
             return "tunable" if self.tunable else "fixed"
         if self.causality == "calculatedParameter":
             return "fixed"
-        return "continuous" if self.type == "Float64" else "discrete"
+        return "continuous" if self.type in _FLOATS else "discrete"
+
+    @property
+    def size(self) -> int:
+        """Number of elements: 1 for a scalar, the product of the dimensions for an array."""
+        return math.prod(self.dimensions)
+
+    @property
+    def in_fmi2(self) -> bool:
+        """True if FMI 2.0 has this variable (a scalar of a type FMI 2.0 knows)."""
+        return _TYPES[self.type][2] is not None and not self.dimensions
+
+    def starts(self) -> list[Any]:
+        """The start value of each element (a scalar start is used for every element)."""
+        start = self.start if self.start is not None else _ZERO[self.type]
+        if isinstance(start, list):
+            return list(start)
+        return [start] * self.size
 
 
 @dataclass(frozen=True)
@@ -95,10 +135,15 @@ class ModelSpec:
     default_step: float = 1e-3
     stop_time: float = 1.0
     variables: tuple[Variable, ...] = field(default_factory=tuple)
+    enumerations: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
     @property
     def outputs(self) -> list[Variable]:
         return [v for v in self.variables if v.causality == "output"]
+
+    def for_fmi(self, fmi_version: int) -> list[Variable]:
+        """The variables of one FMI version's model description (FMI 2.0: the subset it has)."""
+        return [v for v in self.variables if fmi_version == 3 or v.in_fmi2]
 
     def variable(self, name: str) -> Variable:
         for v in self.variables:
@@ -118,9 +163,13 @@ def load_spec(folder: Path) -> ModelSpec:
     for key in ("name", "description", "instantiation_token", "version", "sources"):
         if key not in model:
             raise ConfigurationError(f"{path}: [model] has no {key!r}")
+    enumerations = {name: tuple(items) for name, items in data.get("enumerations", {}).items()}
+    for name, items in enumerations.items():
+        if not items or not all(isinstance(item, str) and item for item in items):
+            raise ConfigurationError(f"{path}: enumeration {name!r} needs a list of item names")
     variables = [Variable("time", 0, "Float64", "independent", "Simulation time", "s")]
     for i, raw in enumerate(data.get("variable", []), start=1):
-        variables.append(_variable(path, i, raw))
+        variables.append(_variable(path, i, raw, enumerations))
     names = [v.name for v in variables]
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
@@ -131,11 +180,11 @@ def load_spec(folder: Path) -> ModelSpec:
         shared=tuple(model.get("shared", ())),
         event_indicators=int(model.get("event_indicators", 0)), has_events=bool(model.get("events", False)),
         default_step=float(model.get("default_step", 1e-3)), stop_time=float(model.get("stop_time", 1.0)),
-        variables=tuple(variables),
+        variables=tuple(variables), enumerations=enumerations,
     )
 
 
-def _variable(path: Path, vr: int, raw: dict[str, Any]) -> Variable:
+def _variable(path: Path, vr: int, raw: dict[str, Any], enumerations: dict[str, tuple[str, ...]]) -> Variable:
     where = f"{path}: variable {raw.get('name', f'#{vr}')!r}"
     type_ = raw.get("type")
     if type_ not in _TYPES:
@@ -146,36 +195,110 @@ def _variable(path: Path, vr: int, raw: dict[str, Any]) -> Variable:
     unit = raw.get("unit", "")
     if unit and unit not in UNITS:
         raise ConfigurationError(f"{where}: unit {unit!r} is not in cosim.fmudesc.UNITS; add it there")
+    if unit and type_ not in _FLOATS:
+        raise ConfigurationError(f"{where}: only Float32 and Float64 variables have a unit in FMI")
     if causality in ("parameter", "input") and "start" not in raw:
         raise ConfigurationError(f"{where}: a {causality} needs a start value")
-    known = {"name", "type", "causality", "description", "unit", "start", "min", "max", "positive", "tunable"}
+    known = {"name", "type", "causality", "description", "unit", "start", "min", "max", "positive", "tunable",
+             "dimensions", "declared_type"}
     unknown = sorted(set(raw) - known)
     if unknown:
         raise ConfigurationError(f"{where}: unknown keys {', '.join(unknown)} (known: {', '.join(sorted(known))})")
-    return Variable(name=raw["name"], vr=vr, type=type_, causality=causality,
-                    description=raw.get("description", ""), unit=unit, start=raw.get("start"),
-                    min=raw.get("min"), max=raw.get("max"), positive=bool(raw.get("positive", False)),
-                    tunable=bool(raw.get("tunable", False)))
+    dimensions = tuple(raw.get("dimensions", ()))
+    if dimensions and (type_ in ("String", "Binary") or not all(isinstance(d, int) and d > 0 for d in dimensions)):
+        raise ConfigurationError(f"{where}: dimensions {list(dimensions)} are not allowed (allowed: positive "
+                                 "integers, for numeric and Boolean variables)")
+    declared_type = raw.get("declared_type", "")
+    items: tuple[str, ...] = ()
+    if type_ == "Enumeration":
+        if declared_type not in enumerations:
+            raise ConfigurationError(f"{where}: declared_type {declared_type!r} is not one of the [enumerations] "
+                                     f"({', '.join(enumerations) or 'none'})")
+        items = enumerations[declared_type]
+    variable = Variable(name=raw["name"], vr=vr, type=type_, causality=causality,
+                        description=raw.get("description", ""), unit=unit, start=raw.get("start"),
+                        min=raw.get("min"), max=raw.get("max"), positive=bool(raw.get("positive", False)),
+                        tunable=bool(raw.get("tunable", False)), dimensions=dimensions,
+                        declared_type=declared_type, items=items)
+    _check_starts(where, variable)
+    return variable
+
+
+_ZERO: dict[str, Any] = {**dict.fromkeys(_TYPES, 0), "Float32": 0.0, "Float64": 0.0, "Boolean": False,
+                         "String": "", "Binary": "", "Enumeration": 1}
+
+
+def _check_starts(where: str, v: Variable) -> None:
+    """Refuse start values of the wrong count or type, and integers outside their type's range."""
+    if isinstance(v.start, list) and len(v.start) != v.size:
+        raise ConfigurationError(f"{where}: {len(v.start)} start values for {v.size} elements")
+    limits = INTEGER_RANGES.get(v.type) or ((1, len(v.items)) if v.type == "Enumeration" else None)
+    for value in [*v.starts(), *(x for x in (v.min, v.max) if x is not None)]:
+        if v.type == "String":
+            ok = isinstance(value, str)
+        elif v.type == "Binary":
+            ok = isinstance(value, str) and _is_hex(value)
+        elif v.type == "Boolean":
+            ok = isinstance(value, bool)
+        elif v.type in _FLOATS:
+            ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+        else:
+            ok = isinstance(value, int) and not isinstance(value, bool) and limits is not None and \
+                limits[0] <= value <= limits[1]
+        if not ok:
+            allowed = f"{limits[0]}..{limits[1]}" if limits else f"a {v.type} value"
+            raise ConfigurationError.out_of_range("start, min or max", value, allowed, where=where)
+
+
+def _is_hex(text: str) -> bool:
+    try:
+        bytes.fromhex(text)
+    except ValueError:
+        return False
+    return True
 
 
 # -- C -------------------------------------------------------------------------------------------
 def _c_value(v: Variable, value: Any) -> str:
-    if v.type == "Float64":
-        return repr(float(value))
+    if v.type in _FLOATS:
+        return repr(float(value)) + ("f" if v.type == "Float32" else "")
     if v.type == "Boolean":
         return "1" if value else "0"
-    return str(int(value))
+    number = int(value)
+    low, _ = INTEGER_RANGES.get(v.type, (0, 0))
+    if v.type.startswith("Int") and number == low:
+        return f"INT{v.type[3:]}_MIN"
+    if v.type in ("Int64", "Enumeration"):
+        return f"INT64_C({number})"
+    if v.type == "UInt64":
+        return f"UINT64_C({number})"
+    return f"{number}u" if v.type.startswith("UInt") else str(number)
 
 
 def _c_string(text: str) -> str:
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
 
+def _c_bytes(data: bytes) -> str:
+    """A C string literal of any bytes: printable ASCII as it is, the rest as three-digit octal escapes
+    (which never run into the next character)."""
+    return '"' + "".join(chr(b) if 32 <= b < 127 and chr(b) not in '"\\?' else f"\\{b:03o}" for b in data) + '"'
+
+
+def _c_field(v: Variable) -> str:
+    if v.type == "String":
+        return f"char {v.name}[CF_STRING_CAPACITY]"
+    if v.dimensions:
+        return f"{_TYPES[v.type][0]} {v.name}[{v.size}]"
+    return f"{_TYPES[v.type][0]} {v.name}"
+
+
 def model_vars_h(spec: ModelSpec) -> str:
     """The generated header: ModelData, value references and the variable table's declaration."""
-    fields = "\n".join(f"    {_TYPES[v.type][0]} {v.name}; /* {v.causality}{' [' + v.unit + ']' if v.unit else ''} */"
+    fields = "\n".join(f"    {_c_field(v)}; /* {v.causality}{' [' + v.unit + ']' if v.unit else ''} */"
                        for v in spec.variables[1:])
     vrs = "\n".join(f"#define VR_{v.name.upper()} {v.vr}" for v in spec.variables)
+    sizes = "\n".join(f"#define N_{v.name.upper()} {v.size}" for v in spec.variables if v.dimensions)
     return f"""/* Generated by cosim.fmubuild from model.toml: do not edit. */
 #ifndef MODEL_VARS_H
 #define MODEL_VARS_H
@@ -186,6 +309,7 @@ def model_vars_h(spec: ModelSpec) -> str:
 #define N_MODEL_VARS {len(spec.variables)}
 
 {vrs}
+{sizes}
 
 typedef struct {{
 {fields}
@@ -198,19 +322,40 @@ void model_vars_defaults(ModelData *v);
 """
 
 
+def _c_limits(v: Variable) -> tuple[Any, Any]:
+    if v.type == "Enumeration":
+        return 1, len(v.items)
+    return v.min, v.max
+
+
+def _c_defaults(v: Variable) -> list[str]:
+    if v.type == "String":
+        data = str(v.starts()[0]).encode()
+        return [f"    memcpy(v->{v.name}, {_c_bytes(data)}, {len(data) + 1});"]
+    if v.type == "Binary":
+        data = bytes.fromhex(str(v.starts()[0]))
+        return [f"    v->{v.name}.size = {len(data)};"] + (
+            [f"    memcpy(v->{v.name}.data, {_c_bytes(data)}, {len(data)});"] if data else [])
+    if not v.dimensions:
+        return [f"    v->{v.name} = {_c_value(v, v.starts()[0])};"]
+    return [f"    v->{v.name}[{i}] = {_c_value(v, value)};" for i, value in enumerate(v.starts())]
+
+
 def model_vars_c(spec: ModelSpec) -> str:
     """The generated variable table and start values."""
     rows = []
     for v in spec.variables:
         offset = "(size_t)-1" if v.causality == "independent" else f"offsetof(ModelData, {v.name})"
         causality = "CA_INDEPENDENT" if v.causality == "independent" else _CAUSALITIES[v.causality]
+        low, high = _c_limits(v)
         rows.append(
             f"    {{{v.vr}, {_c_string(v.name)}, {_c_string(v.unit)}, {_TYPES[v.type][1]}, {causality}, "
-            f"{int(v.tunable)}, {int(v.min is not None)}, {int(v.max is not None)}, "
-            f"{float(v.min or 0.0)!r}, {float(v.max or 0.0)!r}, {int(v.positive)}, {offset}}},")
-    starts = "\n".join(f"    v->{v.name} = {_c_value(v, v.start if v.start is not None else 0)};"
-                       for v in spec.variables[1:])
+            f"{int(v.tunable)}, {int(low is not None)}, {int(high is not None)}, "
+            f"{float(low or 0.0)!r}, {float(high or 0.0)!r}, {int(v.positive)}, {offset}, {v.size}}},")
+    starts = "\n".join(line for v in spec.variables[1:] for line in _c_defaults(v))
     return f"""/* Generated by cosim.fmubuild from model.toml: do not edit. */
+#include <string.h>
+
 #include "cosim_fmu.h"
 
 const VarDef MODEL_VARS[N_MODEL_VARS] = {{
@@ -224,12 +369,27 @@ void model_vars_defaults(ModelData *v) {{
 
 
 # -- XML -----------------------------------------------------------------------------------------
+#: Bytes a Binary variable holds (CF_BINARY_CAPACITY of fmu_src/common/cosim_fmu.h), its FMI 3.0 maxSize.
+BINARY_CAPACITY = 256
+
+
 def _xml_value(v: Variable, value: Any) -> str:
     if v.type == "Boolean":
         return "true" if value else "false"
-    if v.type == "Int32":
-        return str(int(value))
-    return repr(float(value))
+    if v.type in _FLOATS:
+        return repr(float(value))
+    if v.type == "String":
+        return str(value)
+    if v.type == "Binary":
+        return str(value).lower()
+    return str(int(value))
+
+
+def _xml_start(v: Variable) -> str | None:
+    """The start value as the model description writes it (array elements space-separated)."""
+    if v.start is None or v.causality not in ("parameter", "input"):
+        return None
+    return " ".join(_xml_value(v, value) for value in v.starts())
 
 
 def _units_xml(spec: ModelSpec) -> str:
@@ -245,6 +405,24 @@ def _units_xml(spec: ModelSpec) -> str:
     return "\n".join(lines) if used else ""
 
 
+def _types_xml(spec: ModelSpec, fmi_version: int) -> str:
+    """``<TypeDefinitions>`` of the enumerations the version's variables use, on new lines ("" if none)."""
+    used = sorted({v.declared_type for v in spec.for_fmi(fmi_version) if v.type == "Enumeration"})
+    if not used:
+        return ""
+    lines = ["", "  <TypeDefinitions>"]
+    for name in used:
+        items = [f'<Item name={quoteattr(item)} value="{i}"/>' for i, item in enumerate(spec.enumerations[name], 1)]
+        if fmi_version == 2:
+            lines += [f"    <SimpleType name={quoteattr(name)}>", "      <Enumeration>",
+                      *(f"        {item}" for item in items), "      </Enumeration>", "    </SimpleType>"]
+        else:
+            lines += [f"    <EnumerationType name={quoteattr(name)}>", *(f"      {item}" for item in items),
+                      "    </EnumerationType>"]
+    lines.append("  </TypeDefinitions>")
+    return "\n".join(lines)
+
+
 def _common_attrs(v: Variable) -> str:
     attrs = f"name={quoteattr(v.name)} valueReference=\"{v.vr}\""
     if v.description:
@@ -257,18 +435,31 @@ def _common_attrs(v: Variable) -> str:
     return attrs
 
 
-def _type_attrs(v: Variable) -> str:
-    attrs = ""
-    if v.start is not None and v.causality in ("parameter", "input"):
-        attrs += f' start="{_xml_value(v, v.start)}"'
+def _type_attrs(v: Variable, fmi_version: int) -> str:
+    attrs = f" declaredType={quoteattr(v.declared_type)}" if v.declared_type else ""
+    start = _xml_start(v)
+    if start is not None and (fmi_version == 2 or v.type not in ("String", "Binary")):
+        attrs += f" start={quoteattr(start)}"
     if v.unit:
         attrs += f" unit={quoteattr(v.unit)}"
-    if v.type != "Boolean":
+    if v.type not in ("Boolean", "String", "Binary", "Enumeration"):
         if v.min is not None:
             attrs += f' min="{_xml_value(v, v.min)}"'
         if v.max is not None:
             attrs += f' max="{_xml_value(v, v.max)}"'
+    if v.type == "Binary":
+        attrs += f' maxSize="{BINARY_CAPACITY}"'
     return attrs
+
+
+def _fmi3_variable(v: Variable) -> str:
+    attrs = f"{_common_attrs(v)}{_type_attrs(v, 3)}"
+    start = _xml_start(v)
+    children = [f"<Start value={quoteattr(start)}/>"] if start is not None and v.type in ("String", "Binary") else []
+    children += [f'<Dimension start="{d}"/>' for d in v.dimensions]
+    if not children:
+        return f"    <{v.type} {attrs}/>"
+    return f"    <{v.type} {attrs}>\n" + "".join(f"      {c}\n" for c in children) + f"    </{v.type}>"
 
 
 def _categories() -> str:
@@ -278,13 +469,14 @@ def _categories() -> str:
 
 def model_description_fmi2(spec: ModelSpec) -> str:
     """FMI 2.0 ``modelDescription.xml`` (co-simulation, sources listed for rebuilding)."""
+    subset = spec.for_fmi(2)
     variables = []
-    for v in spec.variables:
+    for v in subset:
         variables.append(f"    <ScalarVariable {_common_attrs(v)}>\n"
-                         f"      <{_TYPES[v.type][2]}{_type_attrs(v)}/>\n    </ScalarVariable>")
-    index = {v.name: i for i, v in enumerate(spec.variables, start=1)}
-    outputs = "\n".join(f'      <Unknown index="{index[v.name]}"/>' for v in spec.outputs)
-    initial_unknowns = "\n".join(f'      <Unknown index="{index[v.name]}"/>' for v in spec.variables
+                         f"      <{_TYPES[v.type][2]}{_type_attrs(v, 2)}/>\n    </ScalarVariable>")
+    index = {v.name: i for i, v in enumerate(subset, start=1)}
+    outputs = "\n".join(f'      <Unknown index="{index[v.name]}"/>' for v in subset if v.causality == "output")
+    initial_unknowns = "\n".join(f'      <Unknown index="{index[v.name]}"/>' for v in subset
                                  if v.causality in ("output", "calculatedParameter"))
     files = "\n".join(f'      <File name="{name}"/>' for name in sources_for(spec, 2))
     return f"""<?xml version="1.0" encoding="UTF-8"?>
@@ -297,7 +489,7 @@ def model_description_fmi2(spec: ModelSpec) -> str:
 {files}
     </SourceFiles>
   </CoSimulation>
-{_units_xml(spec)}
+{_units_xml(spec)}{_types_xml(spec, 2)}
 {_categories()}
   <DefaultExperiment startTime="0" stopTime="{spec.stop_time!r}" stepSize="{spec.default_step!r}"/>
   <ModelVariables>
@@ -317,9 +509,7 @@ def model_description_fmi2(spec: ModelSpec) -> str:
 
 def model_description_fmi3(spec: ModelSpec) -> str:
     """FMI 3.0 ``modelDescription.xml`` (co-simulation; early return and event mode if it has events)."""
-    variables = []
-    for v in spec.variables:
-        variables.append(f"    <{v.type} {_common_attrs(v)}{_type_attrs(v)}/>")
+    variables = [_fmi3_variable(v) for v in spec.variables]
     outputs = "\n".join(f'    <Output valueReference="{v.vr}"/>' for v in spec.outputs)
     initial_unknowns = "\n".join(f'    <InitialUnknown valueReference="{v.vr}"/>' for v in spec.variables
                                  if v.causality in ("output", "calculatedParameter"))
@@ -332,7 +522,7 @@ def model_description_fmi3(spec: ModelSpec) -> str:
     canGetAndSetFMUState="true" canSerializeFMUState="true" hasEventMode="{events}"
     mightReturnEarlyFromDoStep="{events}" canReturnEarlyAfterIntermediateUpdate="false"
     providesIntermediateUpdate="false"/>
-{_units_xml(spec)}
+{_units_xml(spec)}{_types_xml(spec, 3)}
 {_categories()}
   <DefaultExperiment startTime="0" stopTime="{spec.stop_time!r}" stepSize="{spec.default_step!r}"/>
   <ModelVariables>

@@ -84,10 +84,12 @@ class Simulation:
     def __init__(self, *, timebase: TimeBase | None = None, seed: int = 0) -> None:
         import numpy as np
 
+        from cosim.validate import integer
+
+        self.seed = integer(seed, "seed", low=0, high=2**63 - 1)
         self.timebase = timebase or TimeBase()
         self.env = _Environment()
         self.trace = Trace(self.timebase)
-        self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._closers: list[Callable[[], None]] = []
 

@@ -1,15 +1,17 @@
-"""The main job: build what is missing, run every bundled scenario, summarise, report.
+"""The main job: build what is missing, run every bundled scenario and example machine, summarise, report.
 
-Each scenario writes its results into ``<out>/<scenario>/``; the job prints one summary table
-and writes ``<out>/summary.json`` and the static HTML report ``<out>/report.html``.
+Each scenario and each example machine (``examples/**/*.toml``) writes its results into
+``<out>/<name>/``; the job prints one summary table and writes ``<out>/summary.json`` and the
+static HTML report ``<out>/report.html``.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
+from cosim.catalog import examples, load
 from cosim.runner import Result, run_scenario, to_json
-from cosim.scenario import bundled, load
+from cosim.scenario import bundled
 
 
 def summary_table(results: list[Result]) -> str:
@@ -28,7 +30,7 @@ def summary_table(results: list[Result]) -> str:
 
 
 def main_job(out: Path) -> int:
-    """Run every bundled scenario into ``out``; returns the exit status (1 if any check failed)."""
+    """Run every bundled scenario and example machine into ``out``; returns the exit status (1 if any failed)."""
     from cosim import fmubuild
 
     for model in fmubuild.list_models():
@@ -36,9 +38,11 @@ def main_job(out: Path) -> int:
             fmubuild.ensure_fmu(model, version)
     out.mkdir(parents=True, exist_ok=True)
     results = []
-    for name in bundled():
-        print(f"running {name} ...", flush=True)
-        results.append(run_scenario(load(name), out=out / name, progress=True))
+    names: list[str | Path] = [*bundled(), *examples()]
+    for name in names:
+        scenario = load(name)
+        print(f"running {scenario.name} ...", flush=True)
+        results.append(run_scenario(scenario, out=out / scenario.name, progress=True))
     print()
     print(summary_table(results))
     (out / "summary.json").write_text(to_json([r.to_dict() for r in results]))

@@ -13,6 +13,13 @@ A :class:`Plant` is advanced (one ``doStep`` from its own time to now) only
 Never on a fixed grid unless a scenario asks for sampling, so results do not depend on how many
 samples are requested (beyond the FMU's own solver tolerance).
 
+Every FMI variable type can be read and set (:mod:`cosim.fmuvars`: arrays as numpy arrays);
+numeric and Boolean outputs can be recorded (an array as one trace signal per element,
+``<plant>.<variable>.<i>``) and scalar ones watched. A plant FMU that asks to end the simulation
+raises :class:`~cosim.errors.PlantTerminated` at the tick of its request (for a watched plant the
+run stops exactly there, before anything else happens at that tick); a terminated plant keeps its
+last values for reads.
+
 :class:`PlantLike` is the one plant protocol: what couplings (:mod:`cosim.couplings`) and
 scenarios use of a plant. :class:`Plant` (an FMU) and the analytic plants of
 :mod:`cosim.plants.analytic` implement it; a test double may too.
@@ -21,10 +28,13 @@ scenarios use of a plant. :class:`Plant` (an FMU) and the analytic plants of
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Protocol
 
-from cosim.errors import ConfigurationError
+import numpy as np
+
+from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmu import Fmu, Value
 from cosim.kernel import At, Simulation
 from cosim.signals import Signal
@@ -84,7 +94,7 @@ class Plant:
         self.name = name
         self.steps = 0
         self._watched: dict[str, Signal] = {}
-        self._pending: dict[str, Value] = {}
+        self._pending: dict[str, float] = {}
         sim.on_close(fmu.close)
 
     @classmethod
@@ -118,9 +128,9 @@ class Plant:
 
     # -- time -------------------------------------------------------------------------------
     def advance(self) -> None:
-        """Bring the FMU to the current simulation time (no-op if it is there)."""
+        """Bring the FMU to the current simulation time (no-op if it is there or has terminated)."""
         now = self.sim.now
-        if self.fmu.t != now:
+        if self.fmu.t != now and self.fmu.terminated is None:
             self._advance_to(now)
             self._check_watched(now)
 
@@ -148,7 +158,11 @@ class Plant:
         signal.subscribe(on_change)
 
     def set(self, values: Mapping[str, Value]) -> None:
-        """Set inputs now (advancing first), for scenario scripts without a signal."""
+        """Set inputs now (advancing first), for scenario scripts without a signal.
+
+        Any type: an array variable takes a sequence or numpy array of its shape (or flat), an
+        Enumeration also its item name; integers are checked against their range first.
+        """
         self.advance()
         for variable, value in values.items():
             self.fmu.set(variable, value)
@@ -175,8 +189,12 @@ class Plant:
         return self.fmu.get(variable)
 
     def record(self, variables: Mapping[str, str] | Sequence[str], *, period: int,
-               start: int | None = None, units: Mapping[str, str] | None = None) -> None:
+               start: int | None = None, units: Mapping[str, str] | None = None) -> Callable[[], None]:
         """Sample outputs every ``period`` ticks at ``start + k*period`` (priority SAMPLE).
+
+        Numbers and Booleans of any FMI type are recorded as ``real`` signals (integers beyond 2^53
+        lose precision there); an array as one signal per element, ``<name>.<i>`` (``<name>.<i>.<j>``
+        for two dimensions). Strings and binaries cannot be recorded.
 
         Parameters
         ----------
@@ -186,43 +204,79 @@ class Plant:
             Sample period [ticks] (> 0).
         start : int, optional
             First sample time [ticks] (default: now).
+        units : mapping, optional
+            Units for the trace (default: the FMU's declared units).
+
+        Returns
+        -------
+        callable
+            Takes one more sample of the same signals now (e.g. at the end of a run, which the
+            periodic samples never reach).
         """
         self.sim.timebase.check_ticks(period, name="period", minimum=1)
         mapping = dict(variables) if isinstance(variables, Mapping) else {
             v: f"{self.name}.{v}" for v in variables}
+        names: list[str] = []
+        arrays = False
         for variable, trace_name in mapping.items():
             var = self.fmu.variable(variable)
+            if not var.kind.is_numeric:
+                raise ConfigurationError(f"{self.name}.{variable} is a {var.type} variable: the trace records "
+                                         "numbers and Booleans only (read it with read())")
             unit = (units or {}).get(variable, var.unit)
-            self.sim.trace.declare(trace_name, "real", unit=unit, description=f"{self.name} {variable}")
+            elements = [trace_name + "".join(f".{i}" for i in index) for index in np.ndindex(var.shape)]
+            arrays = arrays or bool(var.shape)
+            for name in elements:
+                self.sim.trace.declare(name, "real", unit=unit, description=f"{self.name} {variable}")
+            names += elements
         t0 = self.sim.now if start is None else start
 
         self.sim.timebase.check_ticks(t0, name="start", minimum=self.sim.now)
-        read = self.fmu.reader(list(mapping))
-        names = list(mapping.values())
+        read_values = self.fmu.reader(list(mapping))
+        read = (lambda: [x for value in read_values() for x in np.ravel(value).tolist()]) if arrays else read_values
         record = self.sim.trace.record
         sim, env, fmu = self.sim, self.sim.env, self.fmu
+
+        last = [-1]  # the tick of the latest sample
+
+        def take(t: int) -> None:
+            for trace_name, value in zip(names, read(), strict=True):
+                record(trace_name, t, float(value))
+            last[0] = t
+
+        def sample_now() -> None:
+            self.advance()
+            t = fmu.t if fmu.terminated is not None else sim.now  # a terminated plant: its last instant
+            if last[0] != t:
+                take(t)
 
         def sample() -> object:
             # The hot loop of sampled runs. While nothing else is due before the next sample (no
             # queued event at or before it, no look-ahead and no watched output that could make
             # one), samples are taken in a row without a kernel event each: same instants, same
-            # values, a fraction of the cost.
+            # values, a fraction of the cost. A plant that ends the simulation on a sample's tick
+            # still gives that sample (its outputs are valid at the instant it stopped).
             k = 0
             while True:
                 t = t0 + k * period
                 yield At(env, t, Priority.SAMPLE)
-                if fmu.t != t:
-                    self.advance()
-                while True:
-                    for trace_name, value in zip(names, read(), strict=True):
-                        record(trace_name, t, float(value))
-                    k += 1
-                    t = t0 + k * period
-                    if env.look_aheads or self._watched or sim.due_by(t):
-                        break
-                    self._advance_to(t)
+                try:
+                    if fmu.t != t:
+                        self.advance()
+                    while True:
+                        take(t)
+                        k += 1
+                        t = t0 + k * period
+                        if env.look_aheads or self._watched or sim.due_by(t):
+                            break
+                        self._advance_to(t)
+                except PlantTerminated as ended:
+                    if ended.t == t:
+                        take(t)
+                    raise
 
         self.sim.process(sample())  # type: ignore[arg-type]
+        return sample_now
 
     def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
         """Publish output ``variable`` as a signal that changes at the plant's own events.
@@ -231,8 +285,12 @@ class Plant:
         instant, and a change found on the way (exactly located on FMI 3.0 with early return;
         at the end of the step on FMI 2.0) is published at its tick with priority PLANT_EVENT.
         """
+        var = self.fmu.variable(variable)
+        if not var.kind.is_numeric or var.shape:
+            raise ConfigurationError(f"{self.name}.{variable} is a {var.type}{var.dimensions} variable: a watched "
+                                     "output must be a number or a Boolean (a signal carries one)")
         name = signal or f"{self.name}.{variable}"
-        out = Signal(self.sim, name, kind=kind, initial=self.fmu.get(variable),
+        out = Signal(self.sim, name, kind=kind, initial=_number(self.fmu.get(variable)), unit=var.unit,
                      description=f"{self.name} output {variable}")
         if not self._watched:
             self.sim.add_look_ahead(self._look_ahead)
@@ -240,11 +298,16 @@ class Plant:
         return out
 
     def _look_ahead(self, t_next: int) -> None:
-        if self.fmu.t >= t_next:
+        if self.fmu.t >= t_next or self.fmu.terminated is not None:
             return
-        reached = self.fmu.advance_to(t_next)
+        try:
+            reached = self.fmu.advance_to(t_next)
+        except PlantTerminated as ended:
+            # the clock has not moved yet: end the run at the plant's tick, before anything else there
+            self.sim.call_at(max(ended.t, self.sim.now), Priority.PLANT_EVENT, partial(_raise, ended))
+            return
         self.steps += 1
-        self._pending = {v: self.fmu.get(v) for v in self._watched}
+        self._pending = {v: _number(self.fmu.get(v)) for v in self._watched}
         if any(self._pending[v] != s.value for v, s in self._watched.items()):
             self.sim.call_at(reached, Priority.PLANT_EVENT, self._publish_pending)
 
@@ -255,4 +318,14 @@ class Plant:
 
     def _check_watched(self, now: int) -> None:
         for variable, out in self._watched.items():
-            out.set(self.fmu.get(variable))
+            out.set(_number(self.fmu.get(variable)))
+
+
+def _number(value: Value) -> float:
+    """A watched output's value (a number or a Boolean: :meth:`Plant.watch` checked its type)."""
+    assert isinstance(value, int | float), value
+    return value
+
+
+def _raise(error: Exception) -> None:
+    raise error

@@ -9,7 +9,10 @@ recipe, runs it, evaluates every declared check on the trace and writes the resu
 ``trace_meta.json``    resolution and each signal's kind, unit and description
 
 The trace is written even when the run fails half-way (nothing recorded is lost), and the
-result then carries the error.
+result then carries the error. A plant FMU that asks to end the simulation
+(:class:`~cosim.errors.PlantTerminated`) ends the run at that instant with verdict ``TERMINATED``:
+the trace up to then is written, the checks are evaluated on it, and ``result.json`` says which
+plant ended it, when, why, and its last log messages.
 """
 
 from __future__ import annotations
@@ -21,10 +24,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cosim.errors import ConfigurationError, CosimError, ScenarioError
+from cosim.errors import ConfigurationError, CosimError, PlantTerminated, ScenarioError
 from cosim.export import write_trace
 from cosim.kernel import Simulation
 from cosim.scenario import Run, ScenarioFile, Values, where
+from cosim.timebase import TimeBase
 
 RESULT_VERSION = 1
 
@@ -41,6 +45,8 @@ class Result:
     figures: dict[str, dict[str, Any]] = field(default_factory=dict)
     error: str | None = None
     error_kind: str | None = None
+    #: The plant that ended the run early: plant, fmu, t_ticks, t_s, reason, log (None if none did).
+    terminated: dict[str, Any] | None = None
     wall_time_s: float = 0.0
     simulated_s: float = 0.0
     out: Path | None = None
@@ -55,10 +61,13 @@ class Result:
 
     @property
     def verdict(self) -> str:
-        """``PASS`` (every check passed), ``FAIL`` (a check failed) or ``ERROR`` (the run broke)."""
+        """``PASS`` (every check passed), ``FAIL`` (a check failed), ``ERROR`` (the run broke) or
+        ``TERMINATED`` (a plant ended the run early and every check passed up to then)."""
         if self.error is not None:
             return "ERROR"
-        return "FAIL" if self.failed else "PASS"
+        if self.failed:
+            return "FAIL"
+        return "TERMINATED" if self.terminated is not None else "PASS"
 
     @property
     def real_time_factor(self) -> float:
@@ -76,6 +85,7 @@ class Result:
             "checks": self.checks,
             "figures": self.figures,
             "error": self.error,
+            "terminated": self.terminated,
             "wall_time_s": round(self.wall_time_s, 4),
             "simulated_s": self.simulated_s,
             "real_time_factor": round(self.real_time_factor, 2),
@@ -96,6 +106,10 @@ class Result:
             lines.append(f"  figure {name} = {fig['value']:.6g} {fig['unit']}".rstrip())
         if self.error:
             lines.append(f"  ERROR {self.error}")
+        if self.terminated:
+            lines.append(f"  TERMINATED by {self.terminated['plant']} ({self.terminated['fmu']}) at "
+                         f"t = {self.terminated['t_s']:g} s: {self.terminated['reason']}")
+            lines += [f"    {line}" for line in self.terminated["log"][-5:]]
         return "\n".join(lines)
 
 
@@ -125,7 +139,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
     Parameters
     ----------
     scenario : ScenarioFile
-        From :func:`cosim.scenario.load`.
+        From :func:`cosim.catalog.load` (a scenario or a machine file).
     overrides : dict, optional
         ``--set`` values, parsed and range-checked against the declared parameters.
     seed : int
@@ -143,17 +157,22 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         Bad parameters or a broken script (before anything runs).
     """
     values = scenario.resolve(overrides)
-    with Simulation(seed=seed) as sim:
-        end = _end_time(sim, until if until is not None else scenario.until)
+    with Simulation(seed=seed, timebase=TimeBase(scenario.resolution_for(values))) as sim:
+        end = _end_time(sim, until if until is not None else scenario.until_for(values))
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
         run = Run(sim=sim, p=Values(values), until=end)
         started = time.perf_counter()
         bar = _progress_bar(sim, end) if progress else None
+        stop: int | None = None
         try:
             scenario.function(run)
             if sim.now < end:
                 sim.run(until=end)
+        except PlantTerminated as exc:  # not a failure: the run ends at the plant's tick
+            stop = exc.t
+            result.terminated = {"plant": exc.plant, "fmu": exc.fmu, "t_ticks": exc.t,
+                                 "t_s": sim.timebase.seconds(exc.t), "reason": exc.reason, "log": list(exc.log)}
         except (ConfigurationError, ScenarioError) as exc:
             result.error, result.error_kind = where(exc, scenario.path) + str(exc), "configuration"
         except CosimError as exc:
@@ -164,9 +183,9 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         finally:
             if bar is not None:
                 _close_progress_bar(bar, sim)
-            sim.trace.end_t = sim.now
+            sim.trace.end_t = sim.now if stop is None else stop
         result.wall_time_s = time.perf_counter() - started
-        result.simulated_s = sim.timebase.seconds(sim.now)
+        result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
         if result.error is None:
             _evaluate(run, result, scenario)
         if out is not None:
@@ -192,7 +211,10 @@ def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
 def _end_time(sim: Simulation, until: str | int) -> int:
     if isinstance(until, int):
         return sim.timebase.check_ticks(until, name="until", minimum=1)
-    return sim.ticks(until, name="until")
+    end = sim.ticks(until, name="until")
+    if end <= 0:
+        raise ConfigurationError.out_of_range("until", until, "a time > 0, e.g. '20 ms'")
+    return end
 
 
 def _progress_bar(sim: Simulation, end: int) -> Any:

@@ -30,6 +30,7 @@ import sys
 import traceback
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from fractions import Fraction
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Protocol
@@ -197,6 +198,14 @@ class ScenarioFile:
     until: str | int
     function: Callable[[Run], None]
 
+    def until_for(self, values: Mapping[str, Any]) -> str | int:
+        """The end time of a run with these parameter values (``UNTIL``)."""
+        return self.until
+
+    def resolution_for(self, values: Mapping[str, Any]) -> Fraction:
+        """The simulation's resolution [s per tick] for a run with these values (1 ns)."""
+        return Fraction(1, 10**9)
+
     def resolve(self, overrides: Mapping[str, str | Value] | None = None) -> dict[str, Any]:
         """Default parameter values with ``overrides`` parsed and range-checked."""
         declared = {p.name: p for p in self.parameters}
@@ -264,10 +273,11 @@ def _path(name_or_path: str | Path) -> Path:
         if not path.exists():
             raise ConfigurationError(
                 f"no bundled scenario named {name_or_path!r} (bundled: {', '.join(bundled())}); "
-                "give a path to a .py file for your own"
+                "give a path to a .py scenario script or a .toml machine file for your own"
             )
-    if not path.exists():
-        raise ConfigurationError(f"scenario file {path} does not exist")
+    if not path.is_file():
+        folder = " (it is a folder)" if path.is_dir() else ""
+        raise ConfigurationError(f"scenario file {path} does not exist{folder}")
     return path
 
 

@@ -43,8 +43,9 @@ from typing import Any
 
 import numpy as np
 
+from cosim.catalog import load
 from cosim.errors import ConfigurationError
-from cosim.scenario import Param, ScenarioFile, load
+from cosim.scenario import Param, ScenarioFile
 from cosim.timebase import NANOSECOND, UNITS_S
 from cosim.validate import shown
 

@@ -13,6 +13,7 @@ import pytest
 
 import cosim
 from cosim import fmubuild
+from cosim.catalog import examples
 from cosim.cli import COMMANDS, main
 from cosim.kernel import Simulation
 from cosim.runner import _close_progress_bar, _progress_bar
@@ -35,7 +36,7 @@ def test_python_m_cosim_lists_every_bundled_scenario_with_its_description(tmp_pa
     done = _cosim("list", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
-    assert [line.split()[0] for line in lines] == bundled()
+    assert [line.split()[0] for line in lines] == bundled() + [str(p) for p in examples()]
     laser = next(line for line in lines if line.startswith("laser_pwm "))
     assert laser.split(None, 1)[1] == ("Laser PWM: a 40 W CO2 laser gated on twice by a scripted modulation "
                                        "source; energy checked in closed form.")

@@ -112,3 +112,11 @@ def test_skip_to_moves_the_clock_only_when_nothing_is_due_before(sim: Simulation
 def test_skip_to_refuses_while_a_look_ahead_is_registered(sim: Simulation) -> None:
     sim.add_look_ahead(lambda t_next: None)
     assert not sim.skip_to(10) and sim.now == 0
+
+
+@pytest.mark.parametrize("seed", [-1, 2**63, 1.5, True])
+def test_a_seed_outside_0_to_2_63_is_refused_with_its_range(seed: object) -> None:
+    from cosim.errors import ConfigurationError
+
+    with pytest.raises(ConfigurationError, match=r"seed = .* is not allowed \(allowed: 0\.\.9223372036854775807\)"):
+        Simulation(seed=seed)  # type: ignore[arg-type]

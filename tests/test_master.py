@@ -94,19 +94,19 @@ def test_unknown_variable_names_the_plant_and_suggests() -> None:
 
 def test_fmu_error_mid_run_raises_with_its_message_and_keeps_the_trace(tmp_path: Path) -> None:
     sim = Simulation()
-    period = Signal(sim, "ctl.laser.pwm_period", kind="int", initial=1000)
-    laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "gate": True, "pwm_on": 400})
-    laser.drive("pwm_period", period, convert=int)
-    play(sim, [(1 * MS, {period: 500}), (2 * MS, {period: -3})])
+    rate = Signal(sim, "ctl.stepper.step_rate", kind="real", initial=0.0)
+    stepper = Plant.load(sim, "Stepper", name="stepper")
+    stepper.drive("step_rate", rate)
+    play(sim, [(1 * MS, {rate: 500.0}), (2 * MS, {rate: 2e7})])
     with pytest.raises(FmuError) as info:
         try:
             sim.run(until=5 * MS)
         finally:
             write_trace(sim.trace, tmp_path / "out")
-    assert "input pwm_period = -3 is not allowed (allowed: >= 0)" in str(info.value)
+    assert "input step_rate = 20000000 Hz is not allowed (allowed: -10000000..10000000 Hz)" in str(info.value)
     trace = read_trace(tmp_path / "out")
-    t, v = trace.edges("ctl.laser.pwm_period")
-    assert t.tolist() == [0, 1 * MS, 2 * MS] and v.tolist() == [1000, 500, -3]
+    t, v = trace.edges("ctl.stepper.step_rate")
+    assert t.tolist() == [0, 1 * MS, 2 * MS] and v.tolist() == [0.0, 500.0, 2e7]
 
 
 @pytest.mark.parametrize("fmi_version", [2, 3])

@@ -161,3 +161,11 @@ def test_cli_exit_codes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> N
     assert main(["params", path]) == 0
     assert "limit_us" in capsys.readouterr().out
 
+
+
+@pytest.mark.parametrize("until", ["-1 s", "0 s", "0 ms"])
+def test_zero_or_negative_until_is_refused_before_the_run(until: str, capsys: pytest.CaptureFixture[str]) -> None:
+    from cosim.cli import main
+
+    assert main(["run", "pokeys_jog_limit", "--until", until, "--out", "/tmp/cosim-never-written"]) == 2
+    assert f"until = '{until}' is not allowed (allowed: a time > 0" in capsys.readouterr().err

@@ -69,8 +69,8 @@ class PlantEncoder:
             raise ConfigurationError.out_of_range("t of PlantEncoder.sample", t,
                                                   f"the current time {self.sim.now} (a plant is read now)")
         read = self.plant.read
-        last = self._edge(read(self._last))
-        prev = self._edge(read(self._prev)) if last is not None else None
+        last = self._edge(float(read(self._last)))
+        prev = self._edge(float(read(self._prev))) if last is not None else None
         direction = 1 if int(read(self._direction)) >= 0 else -1
         return EncoderSample(int(read(self._count)), last, prev, direction)
 

@@ -21,9 +21,10 @@ from dataclasses import replace
 from typing import Protocol
 
 from cosim.controllers.pokeys import EngineConfig, EngineState, PulseEngine, Status
+from cosim.controllers.pokeys.engine import HOST_SETTABLE, host_state
 from cosim.errors import ConfigurationError
 
-HOST_STATES = frozenset((EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING))
+HOST_STATES = frozenset(HOST_SETTABLE)
 
 
 class EngineAdapter(Protocol):
@@ -129,13 +130,7 @@ class PulseEngineAdapter:
         self.engine.clear_buffer()
 
     def set_state(self, state: int) -> None:
-        try:
-            new = EngineState(state)
-        except ValueError:
-            new = None
-        if new not in HOST_STATES:
-            raise ConfigurationError.out_of_range("engine state", state, "0 stopped, 1 internal, 2 buffer, 10 jogging")
-        assert new is not None
+        new = host_state(state)
         self._requested = new
         if self.enabled or new == EngineState.STOPPED:
             self.engine.set_state(new)

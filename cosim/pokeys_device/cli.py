@@ -116,12 +116,35 @@ async def _serve(server: DeviceServer, duration_s: float | None) -> None:
     await server.serve(stop)
 
 
+def check_options(args: argparse.Namespace) -> None:
+    """Refuse option values the server cannot honour, before anything starts (ConfigurationError)."""
+    import ipaddress
+
+    from cosim import validate
+
+    if args.duration is not None:
+        validate.in_range(args.duration, "--duration", low=0, low_open=True, high=10**9, unit="s")
+    if args.advertise_ip is not None:
+        try:
+            ipaddress.IPv4Address(args.advertise_ip)
+        except ValueError:
+            raise ConfigurationError.out_of_range("--advertise-ip", args.advertise_ip,
+                                                  "an IPv4 address, e.g. 127.0.0.1") from None
+    validate.integer(args.port, "--port", low=0, high=65535)
+    validate.integer(args.rt_priority, "--rt-priority", low=0, high=99)
+    validate.integer(args.seed, "--seed", low=0, high=2**63 - 1)
+    if args.serial is not None:
+        validate.integer(args.serial, "--serial", low=1, high=2**32 - 1)
+
+
 def cmd_pokeys_device(args: argparse.Namespace) -> int:
     """Run the server until stopped; print the report; exit 0 if every check passed, else 1."""
     from cosim.pokeys_device.identity import DeviceIdentity
+    from cosim.pokeys_device.logs import background_stderr
     from cosim.pokeys_device.rig import VirtualPoKeys
     from cosim.pokeys_device.server import DeviceServer, check_address
 
+    check_options(args)
     check_address(args.host, allow_remote=args.allow_remote)
     identity = DeviceIdentity.preset(args.model, serial=args.serial)
     rig = VirtualPoKeys.create(identity, seed=args.seed, wire=switch_wiring(args.limit, args.home),
@@ -131,8 +154,15 @@ def cmd_pokeys_device(args: argparse.Namespace) -> int:
     engine = "pulse engine v1 (0x80)" if identity.pulse_engine == 1 else "pulse engine v2 (0x85, 0xB0)"
     print(f"virtual PoKeys{identity.model} serial {identity.serial}, {engine}, on UDP and TCP "
           f"{args.host}:{args.port}" + (f" for {args.duration} s" if args.duration else "; Ctrl-C stops"), flush=True)
-    with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(_serve(server, args.duration))
+    with background_stderr() as log_queue, contextlib.suppress(KeyboardInterrupt):
+        try:
+            asyncio.run(_serve(server, args.duration))
+        except OSError as exc:  # binding: the port is taken, or the address is not this machine's
+            raise ConfigurationError(f"cannot serve on {args.host}:{args.port}: {exc.strerror or exc} "
+                                     "(another virtual or real device may be using the port: stop it, or "
+                                     "choose another with --port)") from None
+    if log_queue.dropped:
+        print(f"({log_queue.dropped} log messages were dropped: stderr was not read fast enough)")
     formats = (() if args.no_vcd else ("vcd",)) + (args.format,)
     summary = rig.finish(args.out, formats=formats)
     print(rig.pacer.report().summary())

@@ -3,7 +3,8 @@
 The packet log counts every request by outcome (``request``, ``discovery``, ``bad_length``,
 ``bad_header``, ``bad_checksum``, ``bad_multipart``, ``unknown_command``, ``unknown_subcommand``,
 ``rejected`` - a command the engine refused -, ``ignored_value`` - a field out of range that was
-not applied -, ``internal_error``) and keeps the most recent messages. Nothing in it raises: a
+not applied -, ``internal_error``, ``resync`` - stray TCP bytes skipped -, ``socket_error``) and
+keeps the most recent messages. Nothing in it raises: a
 simulated device answers or stays silent, it never stops.
 """
 

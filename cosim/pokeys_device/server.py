@@ -3,7 +3,13 @@
 * UDP: one datagram per request (64 bytes, 512 for the large fill); one 64-byte reply to the
   request's source. An empty datagram is a discovery probe: 14- or 19-byte reply.
 * TCP: back-to-back 64-byte frames; each reply is one 64-byte write (``TCP_NODELAY``, so it leaves
-  at once); the device never closes a connection and has no idle timeout.
+  at once); the device never closes a connection and has no idle timeout. Bytes that do not start
+  a frame (a request header 0xBB with a right header checksum) are skipped up to the next frame,
+  so a stream that received stray bytes is answered again from its next request (``resync``
+  counts them; a frame with a wrong header or checksum is such bytes on TCP).
+* Trouble the event loop reports (a socket error, the file-descriptor limit) is counted in the
+  packet log and reported once per kind and interval (:class:`~.logs.RateLimit`), without a
+  traceback: a server that runs for hours never floods or blocks on its own log.
 * Both sockets share one device. Every request is handled holding the pacer's lock, after it
   caught the simulation up with the wall clock, so a host sees the engine as of the current slot.
 * Bound to 127.0.0.1 unless another address is given; a non-loopback address is refused unless
@@ -22,8 +28,10 @@ import threading
 from typing import Any, cast
 
 from cosim.errors import ConfigurationError
+from cosim.pokeys_device.common import log
 from cosim.pokeys_device.device import Device
-from cosim.pokeys_device.packets import FRAME_BYTES, PORT, PartCollector
+from cosim.pokeys_device.logs import RateLimit
+from cosim.pokeys_device.packets import FRAME_BYTES, HEADER_BYTES, PORT, REQUEST_HEADER, PartCollector, checksum
 from cosim.pokeys_device.realtime import RealtimePacer
 
 
@@ -89,6 +97,7 @@ class _Tcp(asyncio.Protocol):
 
     def data_received(self, data: bytes) -> None:
         self.buffer += data
+        self._resync()
         if len(self.buffer) < FRAME_BYTES:
             return
         with self.server.current():
@@ -98,6 +107,21 @@ class _Tcp(asyncio.Protocol):
                 reply = self.server.device.handle_stream_frame(frame, self.parts)
                 if reply is not None and self.transport is not None:
                     self.transport.write(reply)
+                self._resync()
+
+    def _resync(self) -> None:
+        """Drop bytes before the next frame start: 0xBB with a right header checksum ([7] = sum of [0..6])."""
+        buffer = self.buffer
+        skipped = 0
+        while buffer:
+            if buffer[0] == REQUEST_HEADER and (len(buffer) < HEADER_BYTES or checksum(buffer) == buffer[7]):
+                break  # a frame starts here (or may: wait for its header)
+            k = buffer.find(REQUEST_HEADER, 1)
+            cut = len(buffer) if k < 0 else k
+            del buffer[:cut]
+            skipped += cut
+        if skipped:
+            self.server.device.log.count("resync", f"TCP: skipped {skipped} bytes that start no frame")
 
     def connection_lost(self, exc: Exception | None) -> None:
         self.transport = None
@@ -139,14 +163,27 @@ class DeviceServer:
         self._stop = asyncio.Event()
         self._pacing: asyncio.Task[None] | None = None
         self.connections: set[_Tcp] = set()
+        self.rate_limit = RateLimit()
 
     def current(self) -> contextlib.AbstractContextManager[None]:
         """Hold the simulation, caught up to the wall clock, while a request is handled."""
         return self.pacer.current() if self.pacer is not None else contextlib.nullcontext()
 
+    def loop_trouble(self, loop: asyncio.AbstractEventLoop, context: dict[str, Any]) -> None:
+        """Event-loop exception handler: count the trouble, report it rate-limited, one line, no traceback."""
+        exc = context.get("exception")
+        message = str(context.get("message", "event loop error"))
+        kind = f"{message}: {type(exc).__name__}" if exc is not None else message
+        self.device.log.count("socket_error", f"{kind}: {exc}" if exc is not None else kind)
+        report, held = self.rate_limit.allow(kind)
+        if report:
+            more = f" ({held} more since the last report)" if held else ""
+            log.warning("%s%s%s", kind, f" ({exc})" if exc is not None else "", more)
+
     async def start(self) -> None:
         """Bind both sockets and start pacing."""
         loop = asyncio.get_running_loop()
+        loop.set_exception_handler(self.loop_trouble)
         self._stop = asyncio.Event()
         transport, _ = await loop.create_datagram_endpoint(lambda: _Udp(self), local_addr=(self.host, self.port))
         self._udp = transport

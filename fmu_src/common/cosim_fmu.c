@@ -2,6 +2,7 @@
  * FMU state snapshots. */
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,7 +11,11 @@
 
 static const char *const CAUSALITY_NAME[] = {"independent", "parameter", "calculated parameter",
                                              "input", "output", "local"};
-static const char *const TYPE_NAME[] = {"Float64", "Int32", "Boolean"};
+static const char *const TYPE_NAME[N_VAR_TYPES] = {
+    [VT_FLOAT64] = "Float64", [VT_INT32] = "Int32",   [VT_BOOL] = "Boolean",  [VT_FLOAT32] = "Float32",
+    [VT_INT8] = "Int8",       [VT_UINT8] = "UInt8",   [VT_INT16] = "Int16",   [VT_UINT16] = "UInt16",
+    [VT_UINT32] = "UInt32",   [VT_INT64] = "Int64",   [VT_UINT64] = "UInt64", [VT_STRING] = "String",
+    [VT_BINARY] = "Binary",   [VT_ENUM] = "Enumeration", [VT_BOOL_C] = "Boolean"};
 
 ModelInstance *cf_new(const char *instance_name) {
     ModelInstance *m = (ModelInstance *)calloc(1, sizeof(ModelInstance));
@@ -42,6 +47,7 @@ void cf_defaults(ModelInstance *m) {
     m->start_time = 0.0;
     m->time = 0.0;
     m->outputs_stale = 1;
+    m->terminate_requested = 0;
 }
 
 void cf_log(ModelInstance *m, Status status, const char *category, const char *fmt, ...) {
@@ -86,11 +92,17 @@ Status cf_no_vars(ModelInstance *m, FmiCall call, size_t n) {
     return ST_ERROR;
 }
 
+/* 1 if a variable stored as `stored` can be reached through a getter/setter of `access`. */
+static int reachable(VarType stored, VarType access) {
+    return stored == access || (stored == VT_BOOL && access == VT_BOOL_C) ||
+           (stored == VT_ENUM && (access == VT_INT32 || access == VT_INT64));
+}
+
 static const VarDef *find_var(ModelInstance *m, unsigned vr, VarType type, const char *fn) {
     size_t i;
     for (i = 0; i < N_MODEL_VARS; i++) {
         if (MODEL_VARS[i].vr == vr) {
-            if (MODEL_VARS[i].type != type) {
+            if (!reachable(MODEL_VARS[i].type, type)) {
                 cf_log(m, ST_ERROR, "logStatusError", "%s: variable %s (value reference %u) is %s, not %s", fn,
                        MODEL_VARS[i].name, vr, TYPE_NAME[MODEL_VARS[i].type], TYPE_NAME[type]);
                 return NULL;
@@ -102,7 +114,64 @@ static const VarDef *find_var(ModelInstance *m, unsigned vr, VarType type, const
     return NULL;
 }
 
-static void *field(ModelInstance *m, const VarDef *d) { return (char *)&m->v + d->offset; }
+/* Bytes one element of a variable of this type takes in ModelData. */
+static size_t stored_size(VarType type) {
+    switch (type) {
+    case VT_FLOAT32:
+        return sizeof(float);
+    case VT_INT8:
+    case VT_UINT8:
+        return 1;
+    case VT_INT16:
+    case VT_UINT16:
+        return 2;
+    case VT_INT32:
+    case VT_UINT32:
+        return 4;
+    case VT_INT64:
+    case VT_UINT64:
+    case VT_ENUM:
+        return 8;
+    case VT_BOOL:
+        return sizeof(int);
+    case VT_BOOL_C:
+        return sizeof(bool);
+    case VT_STRING:
+        return CF_STRING_CAPACITY;
+    case VT_BINARY:
+        return sizeof(CfBinary);
+    case VT_FLOAT64:
+    default:
+        return sizeof(double);
+    }
+}
+
+/* Bytes one element takes in the importer's values array. */
+static size_t access_size(VarType type) { return type == VT_STRING ? sizeof(const char *) : stored_size(type); }
+
+static void *element(ModelInstance *m, const VarDef *d, size_t j) {
+    return (char *)&m->v + d->offset + j * stored_size(d->type);
+}
+
+/* Every FMU checks that the importer's values array has one element per element of its variables. */
+static int count_values(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t nvr,
+                        size_t nValues) {
+    size_t i, total = 0;
+    for (i = 0; i < nvr; i++) {
+        const VarDef *d = find_var(m, vr[i], type, cf_call_name(call));
+        if (d == NULL) {
+            return 0;
+        }
+        total += d->n;
+    }
+    if (total != nValues) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: nValues = %lu is not allowed (allowed: %lu, the elements of the "
+               "%lu variables asked for)", cf_call_name(call), (unsigned long)nValues, (unsigned long)total,
+               (unsigned long)nvr);
+        return 0;
+    }
+    return 1;
+}
 
 static void describe_range(const VarDef *d, char *buf, size_t size) {
     if (d->positive && d->has_max) {
@@ -120,11 +189,12 @@ static void describe_range(const VarDef *d, char *buf, size_t size) {
     }
 }
 
-/* 1 if value is allowed for d; logs the reason otherwise. */
+/* 1 if value is allowed for d; logs the reason otherwise. (64-bit integers are compared as doubles:
+ * exact for limits up to 2^53.) */
 static int check_value(ModelInstance *m, const VarDef *d, double value) {
     char range[128];
     int ok = 1;
-    if (d->type == VT_FLOAT64 && !isfinite(value)) {
+    if ((d->type == VT_FLOAT64 || d->type == VT_FLOAT32) && !isfinite(value)) {
         ok = 0;
     }
     if (d->has_min && value < d->min) {
@@ -145,111 +215,218 @@ static int check_value(ModelInstance *m, const VarDef *d, double value) {
     return ok;
 }
 
-static double as_double(const VarDef *d, const void *p) {
-    switch (d->type) {
+/* A numeric or Boolean element as a double, for the range checks (Strings and Binaries: 0). */
+static double as_double(VarType type, const void *p) {
+    switch (type) {
     case VT_FLOAT64:
         return *(const double *)p;
+    case VT_FLOAT32:
+        return (double)*(const float *)p;
+    case VT_INT8:
+        return (double)*(const int8_t *)p;
+    case VT_UINT8:
+        return (double)*(const uint8_t *)p;
+    case VT_INT16:
+        return (double)*(const int16_t *)p;
+    case VT_UINT16:
+        return (double)*(const uint16_t *)p;
     case VT_INT32:
         return (double)*(const int32_t *)p;
+    case VT_UINT32:
+        return (double)*(const uint32_t *)p;
+    case VT_INT64:
+    case VT_ENUM:
+        return (double)*(const int64_t *)p;
+    case VT_UINT64:
+        return (double)*(const uint64_t *)p;
     case VT_BOOL:
+        return *(const int *)p ? 1.0 : 0.0;
+    case VT_BOOL_C:
+        return *(const bool *)p ? 1.0 : 0.0;
+    case VT_STRING:
+    case VT_BINARY:
     default:
-        return (double)*(const int *)p;
+        return 0.0;
     }
 }
 
 static Status check_all(ModelInstance *m) {
-    size_t i;
+    size_t i, j;
     for (i = 0; i < N_MODEL_VARS; i++) {
         const VarDef *d = &MODEL_VARS[i];
-        if ((d->causality == CA_PARAMETER || d->causality == CA_INPUT) &&
-            !check_value(m, d, as_double(d, field(m, d)))) {
-            return ST_ERROR;
+        if (d->causality != CA_PARAMETER && d->causality != CA_INPUT) {
+            continue;
+        }
+        for (j = 0; j < d->n; j++) {
+            if (!check_value(m, d, as_double(d->type, element(m, d, j)))) {
+                return ST_ERROR;
+            }
         }
     }
     return model_check(m);
 }
 
-Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, void *values) {
-    const char *fn = cf_call_name(call);
-    size_t i;
-    if (n > 0 && (vr == NULL || values == NULL)) {
-        return cf_null_argument(m, call, vr == NULL ? "vr" : "values");
+/* Stored element `from` of d to the importer's element `to` of type `access`. */
+static void copy_out(const VarDef *d, const void *from, VarType access, void *to) {
+    if (d->type == VT_BOOL && access == VT_BOOL_C) {
+        *(bool *)to = *(const int *)from != 0;
+    } else if (d->type == VT_ENUM && access == VT_INT32) { /* FMI 2.0 Enumeration: in range by its check */
+        *(int32_t *)to = (int32_t)*(const int64_t *)from;
+    } else if (access == VT_STRING) {
+        *(const char **)to = (const char *)from;
+    } else {
+        memcpy(to, from, stored_size(access));
     }
+}
+
+/* The importer's element `from` of type `access` to stored element `to` of d; 0 (logged) if refused. */
+static int copy_in(ModelInstance *m, const VarDef *d, const void *from, VarType access, void *to) {
+    if (access == VT_STRING) {
+        const char *text = *(const char *const *)from;
+        size_t length;
+        if (text == NULL) {
+            text = "";
+        }
+        length = strlen(text);
+        if (length >= CF_STRING_CAPACITY) {
+            cf_log(m, ST_ERROR, "logStatusError", "%s %s: a string of %lu bytes is not allowed (allowed: up to %d)",
+                   CAUSALITY_NAME[d->causality], d->name, (unsigned long)length, CF_STRING_CAPACITY - 1);
+            return 0;
+        }
+        memcpy(to, text, length + 1);
+        return 1;
+    }
+    if (!check_value(m, d, as_double(access, from))) {
+        return 0;
+    }
+    if (d->type == VT_BOOL) {
+        *(int *)to = as_double(access, from) != 0.0 ? 1 : 0;
+    } else if (d->type == VT_ENUM && access == VT_INT32) {
+        *(int64_t *)to = (int64_t)*(const int32_t *)from;
+    } else {
+        memcpy(to, from, stored_size(access));
+    }
+    return 1;
+}
+
+/* An error unless d may be set in the instance's state. */
+static int settable(ModelInstance *m, const VarDef *d, const char *fn) {
+    if (d->causality != CA_PARAMETER && d->causality != CA_INPUT) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: %s is an %s and cannot be set", fn, d->name,
+               CAUSALITY_NAME[d->causality]);
+        return 0;
+    }
+    if (d->causality == CA_PARAMETER && !d->tunable && (m->phase == PH_STEP || m->phase == PH_EVENT)) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: parameter %s is fixed after initialisation", fn, d->name);
+        return 0;
+    }
+    return 1;
+}
+
+static void refresh_outputs(ModelInstance *m) {
     if (m->outputs_stale && m->phase != PH_INSTANTIATED) {
         model_outputs(m);
         m->outputs_stale = 0;
     }
-    for (i = 0; i < n; i++) {
+}
+
+Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t nvr, void *values,
+              size_t nValues) {
+    const char *fn = cf_call_name(call);
+    size_t i, j, k = 0;
+    if (nvr > 0 && (vr == NULL || values == NULL)) {
+        return cf_null_argument(m, call, vr == NULL ? "vr" : "values");
+    }
+    if (!count_values(m, call, type, vr, nvr, nValues)) {
+        return ST_ERROR;
+    }
+    refresh_outputs(m);
+    for (i = 0; i < nvr; i++) {
         const VarDef *d = find_var(m, vr[i], type, fn);
-        if (d == NULL) {
-            return ST_ERROR;
-        }
         if (d->causality == CA_INDEPENDENT) {
-            ((double *)values)[i] = m->time;
+            ((double *)values)[k++] = m->time;
             continue;
         }
-        switch (type) {
-        case VT_FLOAT64:
-            ((double *)values)[i] = *(double *)field(m, d);
-            break;
-        case VT_INT32:
-            ((int32_t *)values)[i] = *(int32_t *)field(m, d);
-            break;
-        case VT_BOOL:
-            ((int *)values)[i] = *(int *)field(m, d);
-            break;
+        for (j = 0; j < d->n; j++, k++) {
+            copy_out(d, element(m, d, j), type, (char *)values + k * access_size(type));
         }
     }
     return ST_OK;
 }
 
-Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, const void *values) {
+Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t nvr, const void *values,
+              size_t nValues) {
     const char *fn = cf_call_name(call);
-    size_t i;
-    if (n > 0 && (vr == NULL || values == NULL)) {
+    size_t i, j, k = 0;
+    if (nvr > 0 && (vr == NULL || values == NULL)) {
         return cf_null_argument(m, call, vr == NULL ? "vr" : "values");
     }
-    for (i = 0; i < n; i++) {
+    if (!count_values(m, call, type, vr, nvr, nValues)) {
+        return ST_ERROR;
+    }
+    for (i = 0; i < nvr; i++) {
         const VarDef *d = find_var(m, vr[i], type, fn);
-        double value;
-        if (d == NULL) {
+        if (!settable(m, d, fn)) {
             return ST_ERROR;
         }
-        if (d->causality != CA_PARAMETER && d->causality != CA_INPUT) {
-            cf_log(m, ST_ERROR, "logStatusError", "%s: %s is an %s and cannot be set", fn, d->name,
-                   CAUSALITY_NAME[d->causality]);
+        for (j = 0; j < d->n; j++, k++) {
+            if (!copy_in(m, d, (const char *)values + k * access_size(type), type, element(m, d, j))) {
+                return ST_ERROR;
+            }
+        }
+        m->outputs_stale = 1;
+    }
+    return ST_OK;
+}
+
+Status cf_get_binary(ModelInstance *m, FmiCall call, const unsigned *vr, size_t nvr, size_t *sizes,
+                     const unsigned char **values, size_t nValues) {
+    const char *fn = cf_call_name(call);
+    size_t i, j, k = 0;
+    if (nvr > 0 && (vr == NULL || values == NULL || sizes == NULL)) {
+        return cf_null_argument(m, call, vr == NULL ? "vr" : values == NULL ? "values" : "valueSizes");
+    }
+    if (!count_values(m, call, VT_BINARY, vr, nvr, nValues)) {
+        return ST_ERROR;
+    }
+    refresh_outputs(m);
+    for (i = 0; i < nvr; i++) {
+        const VarDef *d = find_var(m, vr[i], VT_BINARY, fn);
+        for (j = 0; j < d->n; j++, k++) {
+            const CfBinary *b = (const CfBinary *)element(m, d, j);
+            sizes[k] = b->size;
+            values[k] = b->data;
+        }
+    }
+    return ST_OK;
+}
+
+Status cf_set_binary(ModelInstance *m, FmiCall call, const unsigned *vr, size_t nvr, const size_t *sizes,
+                     const unsigned char *const *values, size_t nValues) {
+    const char *fn = cf_call_name(call);
+    size_t i, j, k = 0;
+    if (nvr > 0 && (vr == NULL || values == NULL || sizes == NULL)) {
+        return cf_null_argument(m, call, vr == NULL ? "vr" : values == NULL ? "values" : "valueSizes");
+    }
+    if (!count_values(m, call, VT_BINARY, vr, nvr, nValues)) {
+        return ST_ERROR;
+    }
+    for (i = 0; i < nvr; i++) {
+        const VarDef *d = find_var(m, vr[i], VT_BINARY, fn);
+        if (!settable(m, d, fn)) {
             return ST_ERROR;
         }
-        if (d->causality == CA_PARAMETER && !d->tunable &&
-            (m->phase == PH_STEP || m->phase == PH_EVENT)) {
-            cf_log(m, ST_ERROR, "logStatusError", "%s: parameter %s is fixed after initialisation", fn, d->name);
-            return ST_ERROR;
-        }
-        switch (type) {
-        case VT_FLOAT64:
-            value = ((const double *)values)[i];
-            break;
-        case VT_INT32:
-            value = (double)((const int32_t *)values)[i];
-            break;
-        case VT_BOOL:
-        default:
-            value = ((const int *)values)[i] ? 1.0 : 0.0;
-            break;
-        }
-        if (!check_value(m, d, value)) {
-            return ST_ERROR;
-        }
-        switch (type) {
-        case VT_FLOAT64:
-            *(double *)field(m, d) = value;
-            break;
-        case VT_INT32:
-            *(int32_t *)field(m, d) = ((const int32_t *)values)[i];
-            break;
-        case VT_BOOL:
-            *(int *)field(m, d) = ((const int *)values)[i] ? 1 : 0;
-            break;
+        for (j = 0; j < d->n; j++, k++) {
+            CfBinary *b = (CfBinary *)element(m, d, j);
+            if (sizes[k] > CF_BINARY_CAPACITY || (sizes[k] > 0 && values[k] == NULL)) {
+                cf_log(m, ST_ERROR, "logStatusError", "%s %s: a value of %lu bytes is not allowed (allowed: up to %d)",
+                       CAUSALITY_NAME[d->causality], d->name, (unsigned long)sizes[k], CF_BINARY_CAPACITY);
+                return ST_ERROR;
+            }
+            b->size = sizes[k];
+            if (sizes[k] > 0) {
+                memcpy(b->data, values[k], sizes[k]);
+            }
         }
         m->outputs_stale = 1;
     }
@@ -278,6 +455,11 @@ Status cf_do_step(ModelInstance *m, FmiCall call, double t_comm, double h, doubl
     if (!(h >= 0.0) || !isfinite(h)) {
         cf_log(m, ST_ERROR, "logStatusError", "%s: communicationStepSize = %.17g is not allowed (allowed: >= 0 s)",
                cf_call_name(call), h);
+        return ST_ERROR;
+    }
+    if (m->terminate_requested) {
+        cf_log(m, ST_ERROR, "logStatusError", "%s: the model asked to end the simulation at t = %.17g s; "
+               "terminate the instance", cf_call_name(call), m->time);
         return ST_ERROR;
     }
     if (fabs(t_comm - m->time) > tolerance) {
@@ -313,6 +495,7 @@ Status cf_event_indicators(ModelInstance *m, FmiCall call, double *z, size_t n) 
 typedef struct {
     Phase phase;
     double time;
+    int terminate_requested;
     ModelData v;
     ModelState s;
 } ModelSnapshot;
@@ -329,6 +512,7 @@ Status cf_state_get(ModelInstance *m, FmiCall call, void **state) {
     }
     snap->phase = m->phase;
     snap->time = m->time;
+    snap->terminate_requested = m->terminate_requested;
     snap->v = m->v;
     snap->s = m->s;
     *state = snap;
@@ -342,6 +526,7 @@ Status cf_state_set(ModelInstance *m, FmiCall call, const void *state) {
     }
     m->phase = snap->phase;
     m->time = snap->time;
+    m->terminate_requested = snap->terminate_requested;
     m->v = snap->v;
     m->s = snap->s;
     m->outputs_stale = 1;

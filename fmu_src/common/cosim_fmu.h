@@ -15,7 +15,40 @@
 
 typedef enum { ST_OK = 0, ST_WARNING = 1, ST_DISCARD = 2, ST_ERROR = 3, ST_FATAL = 4 } Status;
 
-typedef enum { VT_FLOAT64, VT_INT32, VT_BOOL } VarType;
+/* The FMI 3.0 variable types. FMI 2.0 has Real (VT_FLOAT64), Integer (VT_INT32), Boolean, String
+ * and Enumeration; the other types are FMI 3.0 only. A Boolean is stored as int, an Enumeration as
+ * int64_t (FMI 3.0 reads it with fmi3GetInt64, FMI 2.0 with fmi2GetInteger), a String as a char
+ * array of CF_STRING_CAPACITY bytes, a Binary as a CfBinary. VT_BOOL_C is not a storage type: it is
+ * how fmi3GetBoolean / fmi3SetBoolean pass their values (C bool, where FMI 2.0 passes int). */
+typedef enum {
+    VT_FLOAT64,
+    VT_INT32,
+    VT_BOOL,
+    VT_FLOAT32,
+    VT_INT8,
+    VT_UINT8,
+    VT_INT16,
+    VT_UINT16,
+    VT_UINT32,
+    VT_INT64,
+    VT_UINT64,
+    VT_STRING,
+    VT_BINARY,
+    VT_ENUM,
+    VT_BOOL_C,
+    N_VAR_TYPES
+} VarType;
+
+/* Room for one String value (terminating NUL included) and one Binary value: longer values are
+ * refused by the setter with a message. Both live inside ModelData, so FMU state snapshots stay
+ * plain copies. */
+#define CF_STRING_CAPACITY 256
+#define CF_BINARY_CAPACITY 256
+
+typedef struct {
+    size_t size;
+    unsigned char data[CF_BINARY_CAPACITY];
+} CfBinary;
 
 typedef enum { CA_INDEPENDENT, CA_PARAMETER, CA_CALCULATED_PARAMETER, CA_INPUT, CA_OUTPUT, CA_LOCAL } Causality;
 
@@ -31,6 +64,8 @@ typedef struct {
     double min, max;   /* inclusive limits, checked on every set */
     int positive;      /* value must be > 0 (strict), checked on every set */
     size_t offset;     /* offsetof(ModelData, field); (size_t)-1 for time */
+    size_t n;          /* elements: 1 for a scalar, the product of the dimensions for an array
+                        * (stored flat in row-major order, as FMI 3.0 passes them) */
 } VarDef;
 
 #include "model_vars.h" /* generated: ModelData, value references, MODEL_VARS, N_MODEL_VARS */
@@ -66,6 +101,9 @@ struct ModelInstance {
     int early_return_allowed; /* FMI 3 only */
     int event_mode_used;      /* FMI 3 only */
     int outputs_stale;        /* an input changed since the outputs were last computed */
+    int terminate_requested;  /* the model asked to end the simulation (model_step or model_event_update
+                               * set it): FMI 3.0 reports terminateSimulation, FMI 2.0 returns fmi2Discard
+                               * with fmi2Terminated; a later doStep is refused */
     ModelData v;              /* all variables (generated from model.toml) */
     ModelState s;             /* internal state of the plant */
 };
@@ -87,10 +125,21 @@ Status cf_result(ModelInstance *m, Status status);
 Status cf_null_argument(ModelInstance *m, FmiCall call, const char *argument);
 /* An error: for FMI functions these FMUs do not offer. */
 Status cf_unsupported(ModelInstance *m, FmiCall call);
-/* Fine for n == 0, an error otherwise: for variable types no model has. */
+/* Fine for n == 0, an error otherwise: for functions that reach no variable (clocks). */
 Status cf_no_vars(ModelInstance *m, FmiCall call, size_t n);
-Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, void *values);
-Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t n, const void *values);
+/* Get or set the variables vr[0..nvr) through an FMI getter/setter whose values array holds elements
+ * of `type` (a String: const char *); nValues is the length of that array, the sum of the variables'
+ * element counts (FMI 2.0 passes nvr: it has scalars only). A variable of another type, an unknown
+ * value reference or a wrong nValues is an error with a message naming it. */
+Status cf_get(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t nvr, void *values,
+              size_t nValues);
+Status cf_set(ModelInstance *m, FmiCall call, VarType type, const unsigned *vr, size_t nvr, const void *values,
+              size_t nValues);
+/* fmi3GetBinary / fmi3SetBinary: sizes and pointers of each element. */
+Status cf_get_binary(ModelInstance *m, FmiCall call, const unsigned *vr, size_t nvr, size_t *sizes,
+                     const unsigned char **values, size_t nValues);
+Status cf_set_binary(ModelInstance *m, FmiCall call, const unsigned *vr, size_t nvr, const size_t *sizes,
+                     const unsigned char *const *values, size_t nValues);
 Status cf_exit_init(ModelInstance *m);
 Status cf_do_step(ModelInstance *m, FmiCall call, double t_comm, double h, double *t_reached, int *event);
 Status cf_event_indicators(ModelInstance *m, FmiCall call, double *z, size_t n);
@@ -111,9 +160,11 @@ Status model_check(ModelInstance *m);
 /* Compute outputs at m->time from the state and the current inputs. */
 void model_outputs(ModelInstance *m);
 /* Advance from m->time to t_end [s]. May stop early at an internal event (sets *t_reached < t_end
- * and *event = 1) when m->early_return_allowed; otherwise it handles events internally. */
+ * and *event = 1) when m->early_return_allowed; otherwise it handles events internally. A model that
+ * asks to end the simulation stops at that instant (*t_reached) and sets m->terminate_requested. */
 Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event);
-/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration.
+/* Event mode (FMI 3): update discrete states at m->time; *again = 1 asks for another iteration
+ * (m->terminate_requested = 1 asks to end the simulation).
  * (A plant without events takes this and model_event_indicators from no_events.c.) */
 Status model_event_update(ModelInstance *m, int *again);
 /* Event indicator values at m->time (N_EVENT_INDICATORS of them). */

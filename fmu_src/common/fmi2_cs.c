@@ -136,48 +136,45 @@ fmi2Status fmi2Reset(fmi2Component c) {
 }
 
 /* -- variables ---------------------------------------------------------------------------------- */
+/* FMI 2.0 has scalars only: one value per value reference. An Enumeration is read and set as Integer. */
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     ENTER(fmi2GetReal);
-    return result(M, cf_get(M, CALL_fmi2GetReal, VT_FLOAT64, vr, nvr, value));
+    return result(M, cf_get(M, CALL_fmi2GetReal, VT_FLOAT64, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
     ENTER(fmi2GetInteger);
-    return result(M, cf_get(M, CALL_fmi2GetInteger, VT_INT32, vr, nvr, value));
+    return result(M, cf_get(M, CALL_fmi2GetInteger, VT_INT32, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
     ENTER(fmi2GetBoolean);
-    return result(M, cf_get(M, CALL_fmi2GetBoolean, VT_BOOL, vr, nvr, value));
+    return result(M, cf_get(M, CALL_fmi2GetBoolean, VT_BOOL, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
-    (void)vr;
-    (void)value;
     ENTER(fmi2GetString);
-    return result(M, cf_no_vars(M, CALL_fmi2GetString, nvr));
+    return result(M, cf_get(M, CALL_fmi2GetString, VT_STRING, vr, nvr, (void *)value, nvr));
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
     ENTER(fmi2SetReal);
-    return result(M, cf_set(M, CALL_fmi2SetReal, VT_FLOAT64, vr, nvr, value));
+    return result(M, cf_set(M, CALL_fmi2SetReal, VT_FLOAT64, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
     ENTER(fmi2SetInteger);
-    return result(M, cf_set(M, CALL_fmi2SetInteger, VT_INT32, vr, nvr, value));
+    return result(M, cf_set(M, CALL_fmi2SetInteger, VT_INT32, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
     ENTER(fmi2SetBoolean);
-    return result(M, cf_set(M, CALL_fmi2SetBoolean, VT_BOOL, vr, nvr, value));
+    return result(M, cf_set(M, CALL_fmi2SetBoolean, VT_BOOL, vr, nvr, value, nvr));
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
-    (void)vr;
-    (void)value;
     ENTER(fmi2SetString);
-    return result(M, cf_no_vars(M, CALL_fmi2SetString, nvr));
+    return result(M, cf_set(M, CALL_fmi2SetString, VT_STRING, vr, nvr, value, nvr));
 }
 
 /* -- FMU state ---------------------------------------------------------------------------------- */
@@ -248,18 +245,25 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
     double reached;
     int event;
+    Status status;
     (void)noSetFMUStatePriorToCurrentPoint;
     ENTER(fmi2DoStep);
     /* FMI 2.0 has no early return: events inside the step are handled by the model itself. */
     M->early_return_allowed = 0;
-    return result(M, cf_do_step(M, CALL_fmi2DoStep, currentCommunicationPoint, communicationStepSize, &reached,
-                                &event));
+    status = cf_do_step(M, CALL_fmi2DoStep, currentCommunicationPoint, communicationStepSize, &reached, &event);
+    if (status <= ST_WARNING && M->terminate_requested) {
+        /* the model asked to end the simulation at M->time: fmi2Discard, then fmi2Terminated = true and
+         * fmi2LastSuccessfulTime = that instant (the FMI 2.0 stepFailed state, Step Mode in the table) */
+        return fmi2Discard;
+    }
+    return result(M, status);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c) { return unsupported(c, CALL_fmi2CancelStep); }
 
-/* doStep never returns fmi2Pending or fmi2Discard: the status queries answer the two kinds an
- * importer asks after a step (last successful time, terminated) and refuse the others. */
+/* doStep never returns fmi2Pending; it returns fmi2Discard when the model asks to end the simulation.
+ * The status queries answer the two kinds an importer asks after a step (last successful time,
+ * terminated) and refuse the others. */
 /* The entry check and the arguments of a status query that answers one status kind. */
 static Status status_query(fmi2Component c, FmiCall call, fmi2StatusKind s, fmi2StatusKind answered,
                            const void *value) {
@@ -288,7 +292,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     Status status = status_query(c, CALL_fmi2GetBooleanStatus, s, fmi2Terminated, value);
     if (status == ST_OK) {
-        *value = fmi2False; /* the model never asks to terminate */
+        *value = M->terminate_requested ? fmi2True : fmi2False;
     }
     return result(M, status);
 }

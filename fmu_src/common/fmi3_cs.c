@@ -1,8 +1,9 @@
 /* FMI 3.0 co-simulation interface of a cosim plant, on top of cosim_fmu.h.
  *
- * Supported: Float64, Int32 and Boolean scalars, FMU state get/set/serialise, early return from
- * fmi3DoStep at model events (when the importer allows it) and event mode. Everything else of the
- * API is present and answers with a logged error. */
+ * Supported: every variable type (Float32/64, Int8..UInt64, Boolean, String, Binary, Enumeration),
+ * scalars and arrays, FMU state get/set/serialise, early return from fmi3DoStep at model events (when
+ * the importer allows it), event mode, and terminate requests of the model. Everything else of the
+ * API (clocks, derivatives, configuration mode) is present and answers with a logged error. */
 #include <string.h>
 
 #include "fmi3Functions.h"
@@ -40,16 +41,6 @@ static fmi3Status no_vars(fmi3Instance instance, FmiCall call, size_t nvr) {
         return fmi3Error;
     }
     return result(M, cf_no_vars(M, call, nvr));
-}
-
-/* 1 if there is one value per value reference (the models have scalars only); logs otherwise. */
-static int scalars(ModelInstance *m, FmiCall call, size_t nvr, size_t nValues) {
-    if (nvr != nValues) {
-        cf_log(m, ST_ERROR, "logStatusError", "%s: %lu values for %lu value references (the model has scalars only)",
-               cf_call_name(call), (unsigned long)nValues, (unsigned long)nvr);
-        return 0;
-    }
-    return 1;
 }
 
 const char *fmi3GetVersion(void) { return fmi3Version; }
@@ -188,81 +179,51 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 }
 
 /* -- variables ---------------------------------------------------------------------------------- */
-fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 values[],
-                          size_t nValues) {
-    ENTER(fmi3GetFloat64);
-    if (!scalars(M, CALL_fmi3GetFloat64, nvr, nValues)) {
-        return result(M, ST_ERROR);
+/* One getter and one setter per type: the shared helpers find each variable, check nValues (the sum of
+ * the variables' element counts: arrays are passed flat, row-major) and convert where the storage
+ * differs (Booleans are int inside, fmi3Boolean outside; an Enumeration is an Int64). */
+#define ACCESSORS(NAME, CTYPE, VT)                                                                                 \
+    fmi3Status fmi3Get##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, CTYPE values[],   \
+                             size_t nValues) {                                                                   \
+        ENTER(fmi3Get##NAME);                                                                                    \
+        return result(M, cf_get(M, CALL_fmi3Get##NAME, VT, vr, nvr, (void *)values, nValues));                 \
+    }                                                                                                            \
+    fmi3Status fmi3Set##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,                   \
+                             const CTYPE values[], size_t nValues) {                                             \
+        ENTER(fmi3Set##NAME);                                                                                    \
+        return result(M, cf_set(M, CALL_fmi3Set##NAME, VT, vr, nvr, (const void *)values, nValues));           \
     }
-    return result(M, cf_get(M, CALL_fmi3GetFloat64, VT_FLOAT64, vr, nvr, values));
+
+ACCESSORS(Float32, fmi3Float32, VT_FLOAT32)
+ACCESSORS(Float64, fmi3Float64, VT_FLOAT64)
+ACCESSORS(Int8, fmi3Int8, VT_INT8)
+ACCESSORS(UInt8, fmi3UInt8, VT_UINT8)
+ACCESSORS(Int16, fmi3Int16, VT_INT16)
+ACCESSORS(UInt16, fmi3UInt16, VT_UINT16)
+ACCESSORS(Int32, fmi3Int32, VT_INT32)
+ACCESSORS(UInt32, fmi3UInt32, VT_UINT32)
+ACCESSORS(Int64, fmi3Int64, VT_INT64)
+ACCESSORS(UInt64, fmi3UInt64, VT_UINT64)
+ACCESSORS(Boolean, fmi3Boolean, VT_BOOL_C)
+ACCESSORS(String, fmi3String, VT_STRING)
+
+fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, size_t valueSizes[],
+                         fmi3Binary values[], size_t nValues) {
+    ENTER(fmi3GetBinary);
+    return result(M, cf_get_binary(M, CALL_fmi3GetBinary, vr, nvr, valueSizes, (const unsigned char **)values,
+                                   nValues));
 }
 
-fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Float64 values[], size_t nValues) {
-    ENTER(fmi3SetFloat64);
-    if (!scalars(M, CALL_fmi3SetFloat64, nvr, nValues)) {
-        return result(M, ST_ERROR);
-    }
-    return result(M, cf_set(M, CALL_fmi3SetFloat64, VT_FLOAT64, vr, nvr, values));
+fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
+                         const fmi3Binary values[], size_t nValues) {
+    ENTER(fmi3SetBinary);
+    return result(M, cf_set_binary(M, CALL_fmi3SetBinary, vr, nvr, valueSizes, (const unsigned char *const *)values,
+                                   nValues));
 }
 
-fmi3Status fmi3GetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Int32 values[],
-                        size_t nValues) {
-    ENTER(fmi3GetInt32);
-    if (!scalars(M, CALL_fmi3GetInt32, nvr, nValues)) {
-        return result(M, ST_ERROR);
-    }
-    return result(M, cf_get(M, CALL_fmi3GetInt32, VT_INT32, vr, nvr, values));
-}
-
-fmi3Status fmi3SetInt32(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, const fmi3Int32 values[],
-                        size_t nValues) {
-    ENTER(fmi3SetInt32);
-    if (!scalars(M, CALL_fmi3SetInt32, nvr, nValues)) {
-        return result(M, ST_ERROR);
-    }
-    return result(M, cf_set(M, CALL_fmi3SetInt32, VT_INT32, vr, nvr, values));
-}
-
-/* fmi3Boolean is a C bool; the model stores Booleans as int: convert one at a time. */
-fmi3Status fmi3GetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, fmi3Boolean values[],
-                          size_t nValues) {
-    size_t i;
-    ENTER(fmi3GetBoolean);
-    if (!scalars(M, CALL_fmi3GetBoolean, nvr, nValues)) {
-        return result(M, ST_ERROR);
-    }
-    for (i = 0; i < nvr; i++) {
-        int value = 0;
-        Status status = cf_get(M, CALL_fmi3GetBoolean, VT_BOOL, &vr[i], 1, &value);
-        if (status > ST_WARNING) {
-            return result(M, status);
-        }
-        values[i] = value ? true : false;
-    }
-    return fmi3OK;
-}
-
-fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr,
-                          const fmi3Boolean values[], size_t nValues) {
-    size_t i;
-    ENTER(fmi3SetBoolean);
-    if (!scalars(M, CALL_fmi3SetBoolean, nvr, nValues)) {
-        return result(M, ST_ERROR);
-    }
-    for (i = 0; i < nvr; i++) {
-        int value = values[i] ? 1 : 0;
-        Status status = cf_set(M, CALL_fmi3SetBoolean, VT_BOOL, &vr[i], 1, &value);
-        if (status > ST_WARNING) {
-            return result(M, status);
-        }
-    }
-    return fmi3OK;
-}
-
-/* The functions for variables no model has (the other types, binaries, clocks and their intervals
- * and shifts): fine for no value references, an error otherwise. NO_VARIABLES_n defines one with
- * n arguments after the value references. */
+/* The functions for variables no model has (clocks and their intervals and shifts): fine for no
+ * value references, an error otherwise. NO_VARIABLES_n defines one with n arguments after the value
+ * references. */
 #define NO_VARIABLES_1(NAME, T1)                                                                                     \
     fmi3Status fmi3##NAME(fmi3Instance instance, const fmi3ValueReference vr[], size_t nvr, T1 a) {                  \
         (void)vr;                                                                                                    \
@@ -285,26 +246,6 @@ fmi3Status fmi3SetBoolean(fmi3Instance instance, const fmi3ValueReference vr[], 
         return no_vars(instance, CALL_fmi3##NAME, nvr);                                                              \
     }
 
-NO_VARIABLES_2(GetFloat32, fmi3Float32 *, size_t)
-NO_VARIABLES_2(GetInt8, fmi3Int8 *, size_t)
-NO_VARIABLES_2(GetUInt8, fmi3UInt8 *, size_t)
-NO_VARIABLES_2(GetInt16, fmi3Int16 *, size_t)
-NO_VARIABLES_2(GetUInt16, fmi3UInt16 *, size_t)
-NO_VARIABLES_2(GetUInt32, fmi3UInt32 *, size_t)
-NO_VARIABLES_2(GetInt64, fmi3Int64 *, size_t)
-NO_VARIABLES_2(GetUInt64, fmi3UInt64 *, size_t)
-NO_VARIABLES_2(GetString, fmi3String *, size_t)
-NO_VARIABLES_3(GetBinary, size_t *, fmi3Binary *, size_t)
-NO_VARIABLES_2(SetFloat32, const fmi3Float32 *, size_t)
-NO_VARIABLES_2(SetInt8, const fmi3Int8 *, size_t)
-NO_VARIABLES_2(SetUInt8, const fmi3UInt8 *, size_t)
-NO_VARIABLES_2(SetInt16, const fmi3Int16 *, size_t)
-NO_VARIABLES_2(SetUInt16, const fmi3UInt16 *, size_t)
-NO_VARIABLES_2(SetUInt32, const fmi3UInt32 *, size_t)
-NO_VARIABLES_2(SetInt64, const fmi3Int64 *, size_t)
-NO_VARIABLES_2(SetUInt64, const fmi3UInt64 *, size_t)
-NO_VARIABLES_2(SetString, const fmi3String *, size_t)
-NO_VARIABLES_3(SetBinary, const size_t *, const fmi3Binary *, size_t)
 NO_VARIABLES_1(GetClock, fmi3Clock *)
 NO_VARIABLES_1(SetClock, const fmi3Clock *)
 NO_VARIABLES_2(GetIntervalDecimal, fmi3Float64 *, fmi3IntervalQualifier *)
@@ -425,7 +366,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
         *discreteStatesNeedUpdate = again ? true : false;
     }
     if (terminateSimulation != NULL) {
-        *terminateSimulation = false;
+        *terminateSimulation = M->terminate_requested ? true : false;
     }
     if (nominalsOfContinuousStatesChanged != NULL) {
         *nominalsOfContinuousStatesChanged = false;
@@ -539,10 +480,11 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         *eventHandlingNeeded = (event && M->event_mode_used) ? true : false;
     }
     if (terminateSimulation != NULL) {
-        *terminateSimulation = false;
+        *terminateSimulation = M->terminate_requested ? true : false;
     }
-    if (earlyReturn != NULL) {
-        *earlyReturn = (reached < currentCommunicationPoint + communicationStepSize) ? true : false;
+    if (earlyReturn != NULL) { /* a terminate request ends the step early even without early return */
+        *earlyReturn = (M->early_return_allowed && reached < currentCommunicationPoint + communicationStepSize)
+                           ? true : false;
     }
     if (lastSuccessfulTime != NULL) {
         *lastSuccessfulTime = reached;

@@ -8,11 +8,14 @@
  *   I instantiated   N initialization mode   S step mode (FMI 2.0: stepComplete)
  *   E event mode (FMI 3.0 only)   T terminated   R error   F fatal
  *
- * The states an instance of these FMUs never enters are left out: FMI 2.0 stepInProgress,
- * stepFailed and stepCanceled (doStep runs to its end and never returns fmi2Discard or
- * fmi2Pending); FMI 3.0 Configuration, Reconfiguration, Step Discarded, Intermediate Update and
- * Clock Activation Mode (no structural parameters, no fmi3Discard, no intermediate update, no
- * scheduled execution). Functions allowed only there have an empty row.
+ * The states an instance of these FMUs never enters are left out: FMI 2.0 stepInProgress and
+ * stepCanceled (doStep runs to its end and never returns fmi2Pending); FMI 3.0 Configuration,
+ * Reconfiguration, Step Discarded, Intermediate Update and Clock Activation Mode (no structural
+ * parameters, no fmi3Discard, no intermediate update, no scheduled execution). Functions allowed
+ * only there have an empty row. A model that asks to end the simulation (terminate_requested in
+ * cosim_fmu.h) stays in step or event mode: FMI 2.0 doStep then returns fmi2Discard (its stepFailed
+ * state, whose calls - getters, status queries, Terminate, Reset, FreeInstance - the S column
+ * allows) and FMI 3.0 reports terminateSimulation; a further doStep is refused by cf_do_step.
  *
  * A function that returns fmi2Error / fmi3Error leaves the instance in the error state (R), fmi2Fatal
  * / fmi3Fatal in the fatal state (F), where nothing is allowed. FMI 2.0 has an error state of its

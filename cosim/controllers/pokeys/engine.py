@@ -62,6 +62,18 @@ from cosim.validate import integer
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
 
 
+def host_state(state: object) -> EngineState:
+    """``state`` as one of the states a host may set (0 stopped, 1 internal, 2 buffer, 10 jogging), else raise."""
+    try:
+        new = EngineState(state)  # type: ignore[arg-type]  # any value: the enum refuses what is not a state
+    except ValueError:
+        new = None
+    if new not in HOST_SETTABLE:
+        raise ConfigurationError.out_of_range("engine state", state, "0 stopped, 1 internal, 2 buffer, 10 jogging")
+    assert new is not None
+    return new
+
+
 class PulseEngine:
     """PoKeys pulse engine of any model (:mod:`.models`): 3 axes on the 56 series, up to 8 on the 57CNC.
 
@@ -223,13 +235,7 @@ class PulseEngine:
         Leaving a mode stops its controller at once; the buffer is left as it is (slots the
         internal controller queued are still there: clear the buffer or let them run out first).
         """
-        try:
-            new = EngineState(state)
-        except ValueError:
-            new = None
-        if new not in HOST_SETTABLE:
-            raise ConfigurationError.out_of_range("engine state", state, "0 stopped, 1 internal, 2 buffer, 10 jogging")
-        assert new is not None
+        new = host_state(state)
         self._homing.clear()
         for i, motion in enumerate(self._motions):
             motion.halt()

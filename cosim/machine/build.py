@@ -1,0 +1,121 @@
+"""Building a machine from its file: controller, plants and their couplings, programs, stimuli, checks.
+
+The order is the machine's wiring order, top to bottom, like a scenario script's: the controller
+(its family reads ``[controller]``), every ``[plant.NAME]`` (loaded, then coupled to the
+controller's ports), the programs and the family's own tables, the ``[[stimulus]]`` schedules,
+the ``[[check]]`` and ``[[figure]]`` tables; finally every key of the file must have been used.
+Everything here happens at t = 0, before the run: a bad key, value, file, FMU or variable mapping
+stops the machine before anything is simulated.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+from cosim.controllers.scripted import play
+from cosim.couplings.laser import couple_laser
+from cosim.couplings.stepper import couple_stepper
+from cosim.couplings.switches import couple_switches
+from cosim.errors import ConfigurationError
+from cosim.machine.checks import check_from_table, figure_from_table
+from cosim.machine.document import Table
+from cosim.machine.families import Family, families
+from cosim.master import PlantLike
+from cosim.scenario import Run
+
+#: Couplings a plant table may name, with the function that joins a port to the plant.
+COUPLINGS = {"stepper": couple_stepper, "laser": couple_laser, "switches": None}
+PLANT_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+def build_machine(run: Run, document: Table, *, base: Path) -> Any:
+    """Wire the machine ``document`` describes into ``run``; returns its controller."""
+    machine = document.table("machine", required=True)
+    for key in ("name", "description", "until", "resolution"):
+        machine.raw(key, None)  # read by the loader
+    controller_table = document.table("controller", required=True)
+    family_name = controller_table.text("family", choices=sorted(families()))
+    family: Family = families()[family_name]
+    controller = family.controller(run, controller_table, base=base)
+    plants = {name: _plant(run, family, controller, name, table, base=base)
+              for name, table in document.table("plant").items()}
+    family.start(run, controller, document.tables("program"), document, base=base)
+    for table in document.tables("stimulus"):
+        _stimulus(run, controller, table)
+    for table in document.tables("check"):
+        run.check(check_from_table(table))
+    trace = run.sim.trace
+    for table in document.tables("figure"):
+        name, value, unit = figure_from_table(table, plants)
+        run.figure(name, lambda value=value: value(trace), unit)  # type: ignore[misc]
+    document.finish()
+    return controller
+
+
+def _plant(run: Run, family: Family, controller: Any, name: str, table: Table, *, base: Path) -> PlantLike:
+    if not PLANT_NAME.match(name):
+        raise ConfigurationError(f"{table.file}: {table.path}: a plant name is lower case [a-z0-9_], starting "
+                                 f"with a letter (it prefixes the plant's signals); got {name!r}")
+    model = table.raw("model", None)
+    fmu = table.raw("fmu", None)
+    if (model is None) == (fmu is None):
+        raise ConfigurationError(f"{table.file}: {table.path}: give either model (a bundled plant: Laser, Stepper, "
+                                 "Servo, Conveyor) or fmu (the path of your own co-simulation FMU)")
+    preset = table.text("preset", None)
+    fmi = table.integer("fmi", 3, low=2, high=3)
+    parameters = table.raw("parameters", {})
+    if not isinstance(parameters, dict):
+        raise table.error("parameters", parameters, "a table of FMU parameter values")
+    with table.at("fmu" if fmu is not None else "model"):
+        if fmu is not None:
+            if not isinstance(fmu, str):
+                raise ConfigurationError.out_of_range("value", fmu, "the path of an .fmu file")
+            path = (base / fmu).resolve()
+            if path.suffix != ".fmu" or not path.is_file():
+                raise ConfigurationError(f"FMU file {path} does not exist (or is not an .fmu file)")
+            plant = run.plant(path, name=name, fmi_version=fmi, preset=preset, parameters=parameters)
+        else:
+            if not isinstance(model, str):
+                raise ConfigurationError.out_of_range("value", model, "a bundled model name")
+            plant = run.plant(model, name=name, fmi_version=fmi, preset=preset, parameters=parameters)
+    for kind in COUPLINGS:
+        if not table.has(kind):
+            table.raw(kind, None)
+            continue
+        spec = table.table(kind)
+        port = family.port(controller, kind, spec)
+        variables = spec.raw("variables", None)
+        if variables is not None and not isinstance(variables, dict):
+            raise spec.error("variables", variables, "a table {role = \"variable\"} (a role = \"\" leaves it unwired)")
+        mapping = {k: (v or None) for k, v in (variables or {}).items()}
+        with spec.at():
+            if kind == "switches":
+                couple_switches(plant, port, variables=mapping)
+            else:
+                COUPLINGS[kind](port, plant, variables=mapping)  # type: ignore[misc]
+    record = table.table("record")
+    if record.data:
+        names = record.raw("variables")
+        period = record.time("period")
+        with record.at("variables"):
+            if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+                raise ConfigurationError.out_of_range("value", names, "a list of output names")
+            plant.record(names, period=period)
+    return plant
+
+
+def _stimulus(run: Run, controller: Any, table: Table) -> None:
+    """``[[stimulus]] signal = "pokeys.x.home"; at = ["0 ms", "5 ms"]; values = [0, 1]``."""
+    name = table.text("signal")
+    inputs = {s.name: s for s in controller.inputs()}
+    if name not in inputs:
+        raise table.error("signal", name, ", ".join(sorted(inputs)) or "none (this controller reads no inputs)")
+    times = table.raw("at")
+    values = table.raw("values")
+    with table.at("at"):
+        if not isinstance(times, list) or not isinstance(values, list) or len(times) != len(values):
+            raise ConfigurationError.out_of_range("at, values", (times, values), "two lists of the same length")
+        ticks = [table.ticks(t) for t in times]
+        play(run.sim, [(t, {inputs[name]: v}) for t, v in zip(ticks, values, strict=True)])

@@ -1,0 +1,263 @@
+"""Machine files as documents: TOML read once, ``--set`` applied by key, every key checked on use.
+
+A :class:`Table` wraps one TOML table with its place in the file (``plant.stepper_x``), so every
+message names the file, the key, the value and what is allowed::
+
+    engraver.toml: plant.stepper_x.preset = 'nema17' is not allowed (allowed: nema17_17hs16_2004s1, ...)
+
+Keys are taken with typed getters (:meth:`Table.text`, :meth:`Table.integer`, :meth:`Table.time`,
+...); :meth:`Table.finish` then refuses any key that nothing took (a misspelt key is an error,
+never silently ignored).
+
+``--set KEY=VALUE`` (:func:`apply_overrides`) addresses a key by its dotted path
+(``controller.axis.3.SPEED=2000``) or by any unique trailing part of a path already in the file
+(``SPEED=2000`` when only one table has a SPEED); the value is read as a TOML value (``2000``,
+``true``, ``"2 s"``, ``[1, 2]``), and text that is not a TOML value is taken as a string
+(``--set until=2 s``).
+"""
+
+from __future__ import annotations
+
+import difflib
+import tomllib
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from fractions import Fraction
+from pathlib import Path
+from typing import Any, TypeVar
+
+from cosim import validate
+from cosim.errors import ConfigurationError
+from cosim.timebase import TimeBase
+
+T = TypeVar("T")
+_MISSING: Any = object()
+
+
+def read_document(path: Path) -> dict[str, Any]:
+    """The TOML document of a machine file (ConfigurationError with the file, line and column)."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigurationError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise ConfigurationError(f"{path}: cannot read the machine file ({exc.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigurationError(f"{path}: not a valid TOML machine file: {exc}") from None
+
+
+def machine_description(path: Path) -> str:
+    """The one-line description of a machine file (``machine.description``), for ``cosim list``."""
+    try:
+        machine = read_document(path).get("machine", {})
+    except ConfigurationError:
+        return ""
+    text = machine.get("description", "") if isinstance(machine, dict) else ""
+    return str(text).strip().splitlines()[0] if str(text).strip() else ""
+
+
+def _leaves(data: dict[str, Any], prefix: str = "") -> Iterator[str]:
+    for key, value in data.items():
+        path = f"{prefix}{key}"
+        if isinstance(value, dict):
+            yield from _leaves(value, path + ".")
+        else:
+            yield path
+
+
+def _value(text: str) -> Any:
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(data: dict[str, Any], overrides: dict[str, Any], *, file: Path) -> dict[str, Any]:
+    """A copy of ``data`` with ``--set`` values applied (see the module docstring for the key rules)."""
+    import copy
+
+    out = copy.deepcopy(data)
+    leaves = list(_leaves(data))
+    for key, raw in overrides.items():
+        value = _value(raw) if isinstance(raw, str) else raw
+        path = key if "." in key and (key in leaves or _creatable(out, key)) else None
+        if path is None:
+            matches = [leaf for leaf in leaves if leaf == key or leaf.endswith("." + key)]
+            if len(matches) > 1:
+                raise ConfigurationError(f"{file}: --set {key} is ambiguous: it could be {', '.join(matches)}; "
+                                         "write the whole dotted key")
+            if not matches:
+                close = difflib.get_close_matches(key, leaves, n=3, cutoff=0.5)
+                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                raise ConfigurationError(f"{file}: --set {key}: the machine file has no key {key!r}{hint} "
+                                         "(a new key is written as its whole dotted path, e.g. "
+                                         "controller.axis.3.SPEED)")
+            path = matches[0]
+        *tables, leaf = path.split(".")
+        node = out
+        for part in tables:
+            node = node.setdefault(part, {})
+            if not isinstance(node, dict):
+                raise ConfigurationError(f"{file}: --set {key}: {part} is a value, not a table")
+        node[leaf] = value
+    return out
+
+
+def _creatable(data: dict[str, Any], key: str) -> bool:
+    """A new dotted key can be made when its first part names a table of the document."""
+    return isinstance(data.get(key.split(".")[0]), dict)
+
+
+class Table:
+    """One TOML table of a machine file, with its dotted place for messages.
+
+    Parameters
+    ----------
+    data : dict
+        The table.
+    file : Path
+        The machine file.
+    path : str
+        The table's dotted key (``""`` for the document).
+    timebase : TimeBase
+        Converts times written with a unit (``"40 us"``) into ticks.
+    """
+
+    def __init__(self, data: dict[str, Any], *, file: Path, path: str = "", timebase: TimeBase | None = None) -> None:
+        self.data = data
+        self.file = file
+        self.path = path
+        self.timebase = timebase or TimeBase()
+        self.used: set[str] = set()
+        self.children: list[Table] = []
+
+    # -- places and errors ----------------------------------------------------------------------
+    def key(self, name: str) -> str:
+        """The dotted key of ``name`` in this table."""
+        return f"{self.path}.{name}" if self.path else str(name)
+
+    @property
+    def where(self) -> str:
+        """``FILE: TABLE`` for messages about the table itself."""
+        return f"{self.file}: {self.path or 'the document'}"
+
+    def error(self, name: str, value: object, allowed: str) -> ConfigurationError:
+        """The standard message for key ``name`` of this table."""
+        return ConfigurationError.out_of_range(self.key(name), value, allowed, where=str(self.file))
+
+    @contextmanager
+    def at(self, name: str | None = None) -> Iterator[None]:
+        """Prefix errors raised inside with the file and the key (when they do not name the file yet)."""
+        try:
+            yield
+        except ConfigurationError as exc:
+            text = str(exc)
+            if text.startswith(str(self.file)):
+                raise
+            place = self.key(name) if name is not None else (self.path or "the document")
+            raise ConfigurationError(f"{self.file}: {place}: {text}") from exc
+
+    # -- getting keys ---------------------------------------------------------------------------
+    def has(self, name: str) -> bool:
+        """Is key ``name`` in the table."""
+        return name in self.data
+
+    def raw(self, name: str, default: Any = _MISSING) -> Any:
+        """The value of ``name`` as written (marks it used); a missing key without default is an error."""
+        self.used.add(name)
+        if name not in self.data:
+            if default is _MISSING:
+                raise ConfigurationError(f"{self.file}: {self.key(name)} is missing (required)")
+            return default
+        return self.data[name]
+
+    def _typed(self, name: str, default: Any, convert: Callable[[Any], T]) -> T:
+        value = self.raw(name, default)
+        if value is default and default is not _MISSING:
+            return value
+        with self.at(name):
+            return convert(value)
+
+    def text(self, name: str, default: Any = _MISSING, *, choices: Sequence[str] | None = None) -> str:
+        """A string key (one of ``choices`` if given)."""
+        def convert(value: Any) -> str:
+            if not isinstance(value, str):
+                raise ConfigurationError.out_of_range("value", value, "a string")
+            if choices is not None:
+                validate.choice(value, "value", choices)
+            return value
+        return self._typed(name, default, convert)
+
+    def integer(self, name: str, default: Any = _MISSING, *, low: int | None = None,
+                high: int | None = None, unit: str = "") -> int:
+        """An integer key in ``low..high``."""
+        return self._typed(name, default, lambda v: validate.integer(v, "value", low=low, high=high, unit=unit))
+
+    def number(self, name: str, default: Any = _MISSING) -> Fraction:
+        """A number key, exactly (a TOML float is taken as the decimal it prints as)."""
+        return self._typed(name, default, lambda v: validate.exact(v, "value"))
+
+    def flag(self, name: str, default: Any = _MISSING) -> bool:
+        """A true/false key."""
+        return self._typed(name, default, lambda v: validate.flag(v, "value"))
+
+    def time(self, name: str, default: Any = _MISSING) -> int:
+        """A time written with a unit (``"40 us"``) as ticks of the resolution; a bare integer is ticks."""
+        return self._typed(name, default, self.ticks)
+
+    def ticks(self, value: Any) -> int:
+        """Convert a time value (``"40 us"`` or integer ticks) to ticks."""
+        if isinstance(value, str):
+            return self.timebase.ticks(value, name="time")
+        return validate.integer(value, "time [ticks]", low=0, allowed="a time with a unit, e.g. '40 us'")
+
+    def file_path(self, name: str, base: Path, *, suffixes: Sequence[str] = ()) -> Path:
+        """A file named by key ``name``, relative to ``base`` (the machine file's folder); it must exist."""
+        text = self.text(name)
+        path = (base / text).resolve()
+        if not path.is_file():
+            raise ConfigurationError(f"{self.file}: {self.key(name)}: file {path} does not exist"
+                                     + (" (it is a folder)" if path.is_dir() else ""))
+        if suffixes and path.suffix.lower() not in suffixes:
+            raise self.error(name, text, "a file ending " + ", ".join(suffixes))
+        return path
+
+    def table(self, name: str, *, required: bool = False) -> Table:
+        """A sub-table (an empty one when absent and not ``required``)."""
+        value = self.raw(name, _MISSING if required else {})
+        if not isinstance(value, dict):
+            raise self.error(name, value, "a table")
+        child = Table(value, file=self.file, path=self.key(name), timebase=self.timebase)
+        self.children.append(child)
+        return child
+
+    def tables(self, name: str) -> list[Table]:
+        """An array of tables (``[[check]]``): empty when absent."""
+        value = self.raw(name, [])
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.error(name, value, "an array of tables ([[...]] sections)")
+        out = [Table(v, file=self.file, path=f"{self.key(name)}[{i}]", timebase=self.timebase)
+               for i, v in enumerate(value)]
+        self.children.extend(out)
+        return out
+
+    def items(self) -> list[tuple[str, Table]]:
+        """Every sub-table of this table by name (``[plant.x]``, ``[plant.y]``), in file order."""
+        out = []
+        for name in self.data:
+            out.append((name, self.table(name)))
+        return out
+
+    def finish(self) -> None:
+        """Refuse keys that nothing took, here and in every sub-table taken."""
+        for name in self.data:
+            if name not in self.used:
+                known = sorted(self.used)
+                close = difflib.get_close_matches(str(name), known, n=3)
+                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                raise ConfigurationError(f"{self.file}: {self.key(name)} is not a key of {self.path or 'the document'}"
+                                         f"{hint} (keys used here: {', '.join(known) or 'none'})")
+        for child in self.children:
+            child.finish()
