@@ -427,7 +427,8 @@ class TrioController:
         """
         ax = self.axis(axis)
         self.wired.add(ax.number)
-        return StepDirPort(ax.step, ax.dir, active_delay=self.pulse_width_ticks)
+        step, direction = ax.ensure_outputs()
+        return StepDirPort(step, direction, active_delay=self.pulse_width_ticks)
 
     # -- digital I/O ------------------------------------------------------------------------------
     def input(self, channel: object) -> Signal:
@@ -442,7 +443,7 @@ class TrioController:
         """Every signal the controller drives (:class:`cosim.controllers.Controller`)."""
         out: list[Signal | PulseTrain] = [self.wdog.signal]
         for ax in self.axes.values():
-            out += [ax.step, ax.dir]
+            out += [s for s in (ax.step, ax.dir) if s is not None]
             if ax.pwm is not None and ax.gate is not None:
                 out += [ax.gate.output.signal, ax.pwm.cycle_out.signal, ax.pwm.mark_out.signal, ax.pwm.phase_out]
         return out + self.io.outputs()

@@ -171,16 +171,27 @@ class Axis:
         self.mpos_out = Signal(sim, f"{self.prefix}.mpos", kind="real", unit="units", description="MPOS")
         self.vp_out = Signal(sim, f"{self.prefix}.vp_speed", kind="real", unit="units/s",
                              description="VP_SPEED: path speed of the move being executed")
-        self.step = PulseTrain(sim, f"{self.prefix}.step", pulse_width=pulse_width,
-                               description="step output (ATYPE 1 or 35): each pulse drawn from its leading edge; "
-                                           "the step counts at its trailing (active) edge, pulse_width later")
-        self.dir = Signal(sim, f"{self.prefix}.dir", kind="bit", description="direction output (1 = positive)")
+        self.step: PulseTrain | None = None
+        self.dir: Signal | None = None
         self.invert_out: Signal | None = None
         self.pwm: PwmGenerator | None = None
         self.gate: GateFifo | None = None
         if pwm:
             self.pwm = PwmGenerator(sim, self.prefix)
             self.gate = GateFifo(sim, self.prefix)
+            self.ensure_outputs()
+
+    def ensure_outputs(self) -> tuple[PulseTrain, Signal]:
+        """The step and direction outputs, created on first use (axes 2 and 3 have them from the start;
+        another axis when it becomes a stepper or a plant is coupled to it), so a trace holds only used ones."""
+        if self.step is None or self.dir is None:
+            self.step = PulseTrain(self.sim, f"{self.prefix}.step", pulse_width=self.pulse_width,
+                                   description="step output (ATYPE 1 or 35): each pulse drawn from its leading "
+                                               "edge; the step counts at its trailing (active) edge, pulse_width "
+                                               "later")
+            self.dir = Signal(self.sim, f"{self.prefix}.dir", kind="bit",
+                              description="direction output (1 = positive)")
+        return self.step, self.dir
 
     # -- positions ----------------------------------------------------------------------------
     @property
@@ -236,6 +247,7 @@ class Axis:
         """ATYPE was set to 1 or 35: the step and feedback counters start at the demand position."""
         self.steps = floor(self.demand)
         self.feedback.set_value(self.sim.now, self.steps)
+        self.ensure_outputs()
 
     def set_invert_step(self, on: int) -> None:
         """INVERT_STEP: the step wire idles high and pulses low; the active edge (still the trailing one,
@@ -263,6 +275,7 @@ class Axis:
                 f"{period} ticks leave less than two pulse widths ({2 * self.pulse_width} ticks) between pulses; "
                 "lower SPEED or UNITS")
         direction = 1 if delta > 0 else 0
+        assert self.step is not None and self.dir is not None  # a stepper has its outputs (became_stepper)
         self.dir.set(direction)
         leading = t0 + self.dir_setup
         self.step.emit(leading, period, count, direction)
