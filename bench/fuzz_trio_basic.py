@@ -23,9 +23,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
-from trio_fuzz_programs import exercise, generate, mutate  # noqa: E402
+from trio_fuzz_programs import exercise, generate, mutate
 
-from cosim.controllers.trio.basic import example  # noqa: E402
+from cosim.controllers.trio.basic import example
 
 
 def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, float]:
@@ -37,14 +37,11 @@ def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, fl
     end = time.monotonic() + seconds
     while time.monotonic() < end:
         roll = rng.random()
-        if roll < 0.5:
-            text = generate(rng)
-        else:
-            text = mutate(rng, note if roll < 0.7 else generate(rng))
+        text = generate(rng) if roll < 0.5 else mutate(rng, note if roll < 0.7 else generate(rng))
         started = time.monotonic()
         try:
             parsed += exercise(text)
-        except Exception:  # noqa: BLE001 - a crash is exactly what we count
+        except Exception:
             crashes += 1
             if crashes <= 20:
                 path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"

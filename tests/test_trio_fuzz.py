@@ -7,9 +7,9 @@ import random
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from trio_fuzz_programs import ODD, exercise, generate, mutate
 
 from cosim.controllers.trio.basic import example
-from trio_fuzz_programs import ODD, exercise, generate, mutate
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow], database=None)
 NOTE = example("tn20_81").text

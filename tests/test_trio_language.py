@@ -210,7 +210,8 @@ def test_outputs_inputs_and_read_back() -> None:
     trio = TrioController(sim)
     BasicProgram.parse("OP(8, ON)\nVR(0) = READ_OP(8)\nWA(1)\nOP(8, OFF)\nVR(1) = OP(8)\n"
                        "WAIT UNTIL IN(3) = ON\nOP(9, ON)\n", name="io.bas").start(trio)
-    assert [s.name for s in trio.inputs()] == ["trio.in.3"]  # created when the program starts: drivable
+    assert [s.name for s in trio.io.inputs()] == ["trio.in.3"]  # created when the program starts: drivable
+    assert len(trio.inputs()) == 32  # every input the controller has, for a machine file's stimuli
 
     def stimulus() -> Generator[Any, Any, None]:
         yield sim.at(4_500_000, Priority.HOST)

@@ -83,7 +83,7 @@ class EnergyPerLength(Check):
             level = held_index(tg, t)
             on = (level >= 0) & (g[np.maximum(level, 0)] > 0)
             usable = on[:-1] & on[1:] & (level[:-1] == level[1:])  # gated on, no gate edge in between
-        window = float(self.window)
+        window = float(self.window) * (1 - 1e-9)  # lengths are sums of float distances
         ratios: list[tuple[int, float]] = []
         length = joules = 0.0
         for k in range(step.size):

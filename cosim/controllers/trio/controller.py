@@ -449,12 +449,13 @@ class TrioController:
         return out + self.io.outputs()
 
     def inputs(self) -> list[Signal]:
-        """Every signal the controller reads: the digital inputs (``trio.in.N``) created so far.
+        """Every signal the controller reads: the digital inputs ``trio.in.0`` .. ``trio.in.31``.
 
-        A program creates the inputs its ``IN(n)`` names (literal channels) when it starts;
-        :meth:`input` creates any other before the run.
+        Input signals are created on first use (a program creates those its ``IN(n)`` names when it
+        starts; :meth:`input` creates one), so a trace holds only the inputs in use; asking for all
+        of them here creates them all.
         """
-        return self.io.inputs()
+        return [self.io.input(n) for n in range(self.io.channels)]
 
 
 def _pwm_axes() -> str:
