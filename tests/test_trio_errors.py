@@ -146,3 +146,21 @@ def test_non_finite_and_huge_values_from_python_are_refused(case: str, call: obj
     p.set("ATYPE", 35)
     with pytest.raises(ConfigurationError, match=rf"^{message}$"):
         call(p)  # type: ignore[operator]
+
+
+@pytest.mark.parametrize(("position", "accepted"), [
+    (Fraction(268_435_455, 16), True), (Fraction(268_435_456, 16), False), (Fraction(-268_435_456, 16), True),
+    (Fraction(10**200), False)])
+def test_a_gate_position_must_fit_the_29_bit_compare(position: Fraction, accepted: bool) -> None:
+    """TN20-81: the FIFO compares against the 29-bit PWM_ENCODER: position x UNITS in -2**28 .. 2**28 - 1
+    (268435456 = 2**28). 1e300 used to overflow in the comparison (issue 22)."""
+    p = TrioProcess(TrioController(Simulation(seed=1)), base=(3,))
+    p.set("ATYPE", 35)
+    p.set("UNITS", 16)
+    p.table(0, position)
+    if accepted:
+        p.pwm_control(3, 1, 1, 0, 0)
+    else:
+        with pytest.raises(ConfigurationError, match=r"PWM_CONTROL\(3\) position TABLE\(0\) x UNITS = .* is not "
+                                                     r"allowed \(allowed: -268435456 <= counts < 268435456"):
+            p.pwm_control(3, 1, 1, 0, 0)

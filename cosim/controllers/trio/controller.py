@@ -388,6 +388,11 @@ class TrioController:
         validate.integer(last, "PWM_CONTROL(3) table end", low=first, allowed=f">= table start {first}")
         validate.integer(last - first + 1, "PWM_CONTROL(3) positions in one load", low=1, high=FIFO_DEPTH,
                          allowed=f"1..{FIFO_DEPTH} (the FIFO depth)")
+        half = PWM_ENCODER_MODULUS // 2
+        for k in range(first, last + 1):  # a compare position must fit the 29-bit register, signed
+            validate.in_range(self.table_memory[k] * ax.units, f"PWM_CONTROL(3) position TABLE({k}) x UNITS",
+                              low=-half, high=half, high_open=True,
+                              allowed=f"-{half} <= counts < {half} (a signed 29-bit compare)")
         return toggled_entries(self.table_memory[first:last + 1], ax.units, greater=greater, first_state=first_state)
 
     def _gate(self, axis: int, what: str) -> GateFifo:
