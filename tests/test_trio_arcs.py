@@ -200,3 +200,11 @@ def test_an_error_the_servo_cycle_finds_in_a_move_names_the_program_line_that_is
                        "MOVE(100)\n", name="fast.bas").start(TrioController(sim))
     with pytest.raises(TimingViolation, match=r"^fast.bas line 7: trio.axis0: 10000 step pulses in one servo cycle"):
         sim.run(until=100 * MS)
+
+
+def test_a_following_error_names_the_program_line_of_the_move() -> None:
+    sim = Simulation(seed=1)
+    BasicProgram.parse("BASE(3)\nATYPE = 35\nSERVO = ON\nUNITS = 1\nFE_LIMIT = 0.5\nSPEED = 100\nMOVE(10)\n",
+                       name="fe.bas").start(TrioController(sim, encoder_at_atype=0))
+    with pytest.raises(TimingViolation, match=r"^fe.bas line 7: trio.axis3: following error .* exceeds FE_LIMIT = 0.5"):
+        sim.run(until=100 * MS)
