@@ -10,7 +10,7 @@
   written last.
 * ``PRINT`` lines go to :class:`Console`: each with the simulated time, the process, the program
   and its line; the trace signal ``trio.print`` counts them, so the trace shows when they were
-  written.
+  written; each is also logged (INFO) on the ``cosim.trio.console`` logger.
 
 Signals are created on first use (a program's literal channels when it starts), so a trace holds
 only the channels a machine uses.
@@ -18,6 +18,7 @@ only the channels a machine uses.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -28,6 +29,9 @@ from cosim.signals import Signal
 
 if TYPE_CHECKING:
     from cosim.kernel import Simulation
+
+#: Every console line is also logged here (INFO), for a runner that shows or stores a run's log.
+LOG = logging.getLogger("cosim.trio.console")
 
 
 class DigitalIo:
@@ -142,6 +146,7 @@ class Console:
         """Record a completed line now."""
         self.lines.append(ConsoleLine(self.sim.now, process, program, line, text))
         self.count.set(len(self.lines))
+        LOG.info("t = %d ticks [%d] %s:%d  %s", self.sim.now, process, program, line, text)
 
     def text(self) -> str:
         """Every line as ``t [ms]  process  program:line  text``, one per line."""
