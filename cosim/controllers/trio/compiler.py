@@ -17,26 +17,24 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from lark import Token, Tree
 
 from cosim.controllers.trio import keywords as kw
-from cosim.controllers.trio.profile import sqrt_down
-from cosim.controllers.trio.values import Value, fit, hex_literal, integer_part, literal, to_text
+from cosim.controllers.trio import operations as ops
+from cosim.controllers.trio.values import Value, fit, hex_literal, integer_part, literal
 from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from cosim.controllers.trio.basic import BasicRun
 
-Op = Callable[["BasicRun", int], int]
-Expr = Callable[["BasicRun"], Value]
+Op = ops.Op
+Expr = ops.Expr
 #: Deepest nesting of blocks (IF, loops) and of expressions.
 MAX_NESTING = 64
 #: Arguments PWM_CONTROL takes after the mode, by mode (TN20-81).
 PWM_CONTROL_ARGS = {0: 0, 1: 0, 2: 4, 3: 4, 4: 0, 5: 0, 6: 0}
-TRUE_VALUE, FALSE_VALUE = -1, 0
 
 
 @dataclass(frozen=True)
@@ -53,61 +51,6 @@ def _pos(node: Tree | Token) -> tuple[int, int]:
     if isinstance(node, Token):
         return node.line or 0, node.column or 0
     return (node.meta.line, node.meta.column) if not node.meta.empty else (0, 0)
-
-
-def _div(a: Value, b: Value) -> Value:
-    if b == 0:
-        raise ConfigurationError("division by zero")
-    return fit(Fraction(a) / b)
-
-
-def _mod(a: Value, b: Value) -> Value:
-    x, y = integer_part(a), integer_part(b)
-    if y == 0:
-        raise ConfigurationError("MOD by zero")
-    if x < 0 or y < 0:
-        raise ConfigurationError.out_of_range("MOD operand", min(x, y), ">= 0 (the sign rule of MOD for negative "
-                                              "numbers is not in the facts at hand)")
-    return x % y
-
-
-_BINARY: dict[str, Callable[[Value, Value], Value]] = {
-    "+": lambda a, b: fit(a + b), "-": lambda a, b: fit(a - b), "*": lambda a, b: fit(a * b), "/": _div,
-    "MOD": _mod,
-    "AND": lambda a, b: integer_part(a) & integer_part(b), "OR": lambda a, b: integer_part(a) | integer_part(b),
-    "XOR": lambda a, b: integer_part(a) ^ integer_part(b),
-    "<": lambda a, b: TRUE_VALUE if a < b else FALSE_VALUE, ">": lambda a, b: TRUE_VALUE if a > b else FALSE_VALUE,
-    "<=": lambda a, b: TRUE_VALUE if a <= b else FALSE_VALUE,
-    ">=": lambda a, b: TRUE_VALUE if a >= b else FALSE_VALUE,
-    "<>": lambda a, b: TRUE_VALUE if a != b else FALSE_VALUE, "=": lambda a, b: TRUE_VALUE if a == b else FALSE_VALUE,
-}
-
-
-def _sqr(x: Value) -> Value:
-    if x < 0:
-        raise ConfigurationError.out_of_range("SQR argument", x, ">= 0")
-    return fit(sqrt_down(Fraction(x), bits=32))
-
-
-def _abs(x: Value) -> Value:
-    return -x if x < 0 else x
-
-
-def _sgn(x: Value) -> Value:
-    return (x > 0) - (x < 0)
-
-
-_FUNCTIONS: dict[str, Callable[[BasicRun, Value], Value]] = {
-    "TABLE": lambda run, n: fit(run.process.table_value(n), "TABLE value"),
-    "VR": lambda run, n: run.controller.vr(n),
-    "ABS": lambda run, x: _abs(x),
-    "INT": lambda run, x: integer_part(x),
-    "SGN": lambda run, x: _sgn(x),
-    "SQR": lambda run, x: _sqr(x),
-    "IN": lambda run, n: run.process.input(n),
-    "READ_OP": lambda run, n: run.process.read_op(n),
-    "OP": lambda run, n: run.process.read_op(n),
-}
 
 
 class Compiler:
@@ -134,7 +77,7 @@ class Compiler:
             if label not in self.labels:
                 known = ", ".join(sorted(self.labels)) or "none"
                 raise self.fail(node, f"label {label} is not defined (labels: {known})")
-            self.ops[index] = _gosub(self.labels[label]) if gosub else _jump(self.labels[label])
+            self.ops[index] = ops.gosub(self.labels[label]) if gosub else ops.jump(self.labels[label])
         for var, (line, column) in self.read.items():
             if var not in self.assigned:
                 raise ConfigurationError(f"{self.name} line {line}, column {column}: {kw.unknown_name(var)} (not a "
@@ -182,10 +125,10 @@ class Compiler:
             if axis_mod is not None and name in ("WDOG", "TICKS"):
                 raise self.fail(token, f"{name} is not an axis parameter; write {name} = value without AXIS()")
             if name == "TICKS":
-                self.emit(node, _action(lambda run: setattr(run.process, "ticks", value(run))))
+                self.emit(node, ops.action(lambda run: setattr(run.process, "ticks", value(run))))
                 return
             axis = self.axis(axis_mod)
-            self.emit(node, _action(lambda run: run.process.set(name, value(run), axis=axis(run))))
+            self.emit(node, ops.action(lambda run: run.process.set(name, value(run), axis=axis(run))))
             return
         if name in kw.READABLE:
             hint = " (use DEFPOS)" if name in ("DPOS", "MPOS") else ""
@@ -210,7 +153,7 @@ class Compiler:
         if len(args) != 1:
             raise self.fail(token, kw.wrong_count(kw.FUNCTIONS["VR"], len(args)))
         index, value = self.expr(args[0], 0), self.expr(value_node, 0)
-        self.emit(node, _action(lambda run: run.controller.set_vr(index(run), value(run))))
+        self.emit(node, ops.action(lambda run: run.controller.set_vr(index(run), value(run))))
 
     def s_call(self, node: Tree, depth: int) -> None:
         token, *args, axis_mod = node.children
@@ -251,15 +194,15 @@ class Compiler:
                                       f"(allowed: {wanted}, the mode and {wanted - 1} more)")
         if name == "OP":
             self._literal_channel(args[0], self.outputs)
-        self.emit(node, _command(name, values, axis))
+        self.emit(node, ops.command(name, values, axis))
 
     def s_wait_idle(self, node: Tree, depth: int) -> None:
         axis = self.axis(node.children[0])
-        self.emit(node, _wait(lambda run: run.process.wait_idle(axis=axis(run))))
+        self.emit(node, ops.wait(lambda run: run.process.wait_idle(axis=axis(run))))
 
     def s_wait_loaded(self, node: Tree, depth: int) -> None:
         axis = self.axis(node.children[0])
-        self.emit(node, _wait(lambda run: run.process.wait_loaded(axis=axis(run))))
+        self.emit(node, ops.wait(lambda run: run.process.wait_loaded(axis=axis(run))))
 
     def s_wait_until(self, node: Tree, depth: int) -> None:
         condition = self.expr(node.children[0], 0)
@@ -273,10 +216,10 @@ class Compiler:
         self.emit(node, wait_until)
 
     def s_goto(self, node: Tree, depth: int) -> None:
-        self.jumps.append((self.emit(node, _jump(-1)), str(node.children[0]).upper(), node.children[0], False))
+        self.jumps.append((self.emit(node, ops.jump(-1)), str(node.children[0]).upper(), node.children[0], False))
 
     def s_gosub(self, node: Tree, depth: int) -> None:
-        self.jumps.append((self.emit(node, _jump(-1)), str(node.children[0]).upper(), node.children[0], True))
+        self.jumps.append((self.emit(node, ops.jump(-1)), str(node.children[0]).upper(), node.children[0], True))
 
     def s_return_stmt(self, node: Tree, depth: int) -> None:
         self.emit(node, lambda run, pc: run.return_from_gosub())
@@ -290,9 +233,9 @@ class Compiler:
             if child.data == "print_item":
                 item = child.children[0]
                 if isinstance(item, Token) and item.type == "STRING":
-                    parts.append(_text(str(item)[1:-1]))
+                    parts.append(ops.text(str(item)[1:-1]))
                 else:
-                    parts.append(_formatted(self.expr(item, 0)))
+                    parts.append(ops.formatted(self.expr(item, 0)))
                 ends_line = True
             else:
                 if child.data == "comma_sep":
@@ -309,7 +252,7 @@ class Compiler:
         token, process_node = node.children
         program = str(token)[1:-1]
         process = None if process_node is None else self.expr(process_node, 0)
-        self.emit(node, _action(lambda run: run.run_program(program, None if process is None else process(run))))
+        self.emit(node, ops.action(lambda run: run.run_program(program, None if process is None else process(run))))
 
     def s_repeat(self, node: Tree, depth: int) -> None:
         body, condition_node = node.children
@@ -321,9 +264,9 @@ class Compiler:
     def s_while_loop(self, node: Tree, depth: int) -> None:
         condition_node, body = node.children
         condition = self.expr(condition_node, 0)
-        top = self.emit(node, _jump(-1))
+        top = self.emit(node, ops.jump(-1))
         self.block(body, depth + 1)
-        self.emit(node, _jump(top))
+        self.emit(node, ops.jump(top))
         end = len(self.ops)
         self.ops[top] = lambda run, pc: pc + 1 if condition(run) != 0 else end
 
@@ -338,11 +281,11 @@ class Compiler:
         self.read.setdefault(var, _pos(token))
         start, stop = self.expr(start_node, 0), self.expr(stop_node, 0)
         step = (lambda run: 1) if step_node is None else self.expr(step_node, 0)
-        init = self.emit(node, _jump(-1))
+        init = self.emit(node, ops.jump(-1))
         self.block(body, depth + 1)
         next_op = self.emit(next_token if next_token is not None else body if not body.meta.empty else node,
-                            _for_next(var, init, init + 1))
-        self.ops[init] = _for_init(var, start, stop, step, next_op + 1)
+                            ops.for_next(var, init, init + 1))
+        self.ops[init] = ops.for_init(var, start, stop, step, next_op + 1)
 
     def s_if_block(self, node: Tree, depth: int) -> None:
         condition_node, then_body, *rest = node.children
@@ -351,30 +294,30 @@ class Compiler:
         ends: list[int] = []
         for cond_node, body in branches:
             condition = self.expr(cond_node, 0)
-            test = self.emit(cond_node, _jump(-1))
+            test = self.emit(cond_node, ops.jump(-1))
             self.block(body, depth + 1)
-            ends.append(self.emit(node, _jump(-1)))
+            ends.append(self.emit(node, ops.jump(-1)))
             skip_to = len(self.ops)
-            self.ops[test] = _jump_unless(condition, skip_to)
+            self.ops[test] = ops.jump_unless(condition, skip_to)
         if else_body is not None:
             self.block(else_body, depth + 1)
         end = len(self.ops)
         for index in ends:
-            self.ops[index] = _jump(end)
+            self.ops[index] = ops.jump(end)
 
     def s_if_line(self, node: Tree, depth: int) -> None:
         condition_node, then_stmt, *rest = node.children  # lark adds no placeholder for a missing ELSE here
         else_stmt = rest[0] if rest else None
         condition = self.expr(condition_node, 0)
-        test = self.emit(condition_node, _jump(-1))
+        test = self.emit(condition_node, ops.jump(-1))
         self.statement(then_stmt, depth + 1)
         if else_stmt is None:
-            self.ops[test] = _jump_unless(condition, len(self.ops))
+            self.ops[test] = ops.jump_unless(condition, len(self.ops))
             return
-        skip = self.emit(node, _jump(-1))
-        self.ops[test] = _jump_unless(condition, len(self.ops))
+        skip = self.emit(node, ops.jump(-1))
+        self.ops[test] = ops.jump_unless(condition, len(self.ops))
         self.statement(else_stmt, depth + 1)
-        self.ops[skip] = _jump(len(self.ops))
+        self.ops[skip] = ops.jump(len(self.ops))
 
     # -- expressions --------------------------------------------------------------------------
     def axis(self, axis_mod: Tree | None) -> Callable[[BasicRun], Value | None]:
@@ -410,12 +353,13 @@ class Compiler:
             return self.function(node, depth)
         if kind in ("sum", "term", "or_expr", "and_expr"):
             first = self.expr(kids[0], depth + 1)
-            rest = [(_BINARY[str(kids[k]).upper()], self.expr(kids[k + 1], depth + 1)) for k in range(1, len(kids), 2)]
-            return _chain(first, rest)
+            rest = [(ops.BINARY[str(kids[k]).upper()], self.expr(kids[k + 1], depth + 1))
+                    for k in range(1, len(kids), 2)]
+            return ops.chain(first, rest)
         if kind in ("compare", "equal"):
             a = self.expr(kids[0], depth + 1)
             b = self.expr(kids[-1], depth + 1)
-            op = _BINARY[str(kids[1]) if kind == "compare" else "="]
+            op = ops.BINARY[str(kids[1]) if kind == "compare" else "="]
             return lambda run: op(a(run), b(run))
         operand = self.expr(kids[0], depth + 1)
         if kind == "neg":
@@ -461,90 +405,5 @@ class Compiler:
         argument = self.expr(args[0], depth + 1)
         if name == "IN":
             self._literal_channel(args[0], self.inputs)
-        function = _FUNCTIONS[name]
+        function = ops.FUNCTIONS[name]
         return lambda run: function(run, argument(run))
-
-
-def _text(text: str) -> Callable[[BasicRun], str]:
-    return lambda run: text
-
-
-def _formatted(value: Expr) -> Callable[[BasicRun], str]:
-    return lambda run: to_text(value(run))
-
-
-def _chain(first: Expr, rest: list[tuple[Callable[[Value, Value], Value], Expr]]) -> Expr:
-    def evaluate(run: BasicRun) -> Value:
-        value = first(run)
-        for op, operand in rest:
-            value = op(value, operand(run))
-        return value
-
-    return evaluate
-
-
-def _action(action: Callable[[BasicRun], object]) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        action(run)
-        return pc + 1
-
-    return op
-
-
-def _wait(event: Callable[[BasicRun], Any]) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        run.pending = event(run)
-        return pc + 1
-
-    return op
-
-
-def _jump(target: int) -> Op:
-    return lambda run, pc: target
-
-
-def _jump_unless(condition: Expr, target: int) -> Op:
-    return lambda run, pc: pc + 1 if condition(run) != 0 else target
-
-
-def _gosub(target: int) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        run.call_gosub(pc + 1)
-        return target
-
-    return op
-
-
-def _for_init(var: str, start: Expr, stop: Expr, step: Expr, exit_pc: int) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        value, limit, increment = start(run), stop(run), step(run)
-        if increment == 0:
-            raise ConfigurationError.out_of_range("FOR STEP", 0, "not 0")
-        run.loops[pc] = (limit, increment)
-        run.variables[var] = value
-        past = value > limit if increment > 0 else value < limit
-        return exit_pc if past else pc + 1
-
-    return op
-
-
-def _for_next(var: str, init: int, body: int) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        state = run.loops.get(init)
-        if state is None:
-            raise ConfigurationError(f"NEXT {var} without its FOR (a GOTO into the loop?)")
-        limit, increment = state
-        value = run.variables[var] = fit(run.variable(var) + increment, var)
-        past = value > limit if increment > 0 else value < limit
-        return pc + 1 if past else body
-
-    return op
-
-
-def _command(name: str, values: list[Expr], axis: Callable[[BasicRun], Value | None]) -> Op:
-    def op(run: BasicRun, pc: int) -> int:
-        args = [v(run) for v in values]
-        run.pending = run.command(name, args, axis(run))
-        return pc + 1
-
-    return op

@@ -170,9 +170,9 @@ class TrioController:
             return
         error = axis.dpos - axis.mpos_sampled
         if abs(error) > axis.params["FE_LIMIT"]:
-            origin = axis.current.origin if axis.current is not None and axis.current.origin else ""
+            origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
             raise TimingViolation(
-                f"{origin + ': ' if origin else ''}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
+                f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
                 f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
                 "motion error)")
 
