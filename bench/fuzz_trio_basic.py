@@ -4,7 +4,8 @@ Half the inputs are programs written by ``tests/trio_fuzz_programs.generate`` (s
 subset with odd numbers and nesting), half are mutations of those or of the TN20-81 example (characters
 inserted, deleted or replaced, every kind of line end, lines swapped). Each input is parsed and, if it
 parses, run for 30 simulated ms. A crash is any exception that is not one of the project's own errors
-(:class:`cosim.errors.CosimError`); the first ones are written to ``--crashes`` with their traceback.
+(:class:`cosim.errors.CosimError`); the first ones are written to ``--crashes`` with their traceback. An
+input that takes more than ``SLOW_S`` of wall time is counted as slow and written there too.
 
 Run (``--workers`` processes, each with its own seed, for ``--minutes``)::
 
@@ -27,12 +28,15 @@ from trio_fuzz_programs import exercise, generate, mutate
 
 from cosim.controllers.trio.basic import example
 
+#: Wall time above which an input counts as slow [s].
+SLOW_S = 5.0
 
-def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, float]:
-    """Fuzz for ``seconds``; returns (inputs, parsed, crashes, slowest input [s])."""
+
+def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, float, int]:
+    """Fuzz for ``seconds``; returns (inputs, parsed, crashes, slowest input [s], slow inputs)."""
     rng = random.Random(seed)
     note = example("tn20_81").text
-    inputs = parsed = crashes = 0
+    inputs = parsed = crashes = slow = 0
     slowest = 0.0
     end = time.monotonic() + seconds
     while time.monotonic() < end:
@@ -46,9 +50,14 @@ def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, fl
             if crashes <= 20:
                 path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"
                 path.write_text(f"{text!r}\n\n{traceback.format_exc()}")
-        slowest = max(slowest, time.monotonic() - started)
+        took = time.monotonic() - started
+        if took > SLOW_S:
+            slow += 1
+            if slow <= 20:
+                (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
+        slowest = max(slowest, took)
         inputs += 1
-    return inputs, parsed, crashes, slowest
+    return inputs, parsed, crashes, slowest, slow
 
 
 def main() -> None:
@@ -65,7 +74,8 @@ def main() -> None:
         results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes) for k in range(args.workers)])
     inputs = sum(r[0] for r in results)
     print(f"{inputs} inputs ({sum(r[1] for r in results)} parsed and run), {sum(r[2] for r in results)} crashes, "
-          f"slowest input {max(r[3] for r in results):.2f} s, {time.monotonic() - started:.0f} s wall, "
+          f"slowest input {max(r[3] for r in results):.2f} s, {sum(r[4] for r in results)} slower than {SLOW_S:g} s, "
+          f"{time.monotonic() - started:.0f} s wall, "
           f"{args.workers} workers")
 
 

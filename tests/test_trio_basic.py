@@ -209,7 +209,7 @@ def test_run_time_errors_carry_the_line_number(text: str, error: type[Exception]
 
 
 def test_a_loop_that_never_waits_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(basic, "MAX_STATEMENTS_PER_INSTANT", 500)
-    with pytest.raises(TimingViolation, match=r"t.bas line 4: process 1 ran 500 statements at t = 0 ns without "
-                                              r"waiting"):
+    monkeypatch.setattr(basic, "MAX_STATEMENTS_PER_SERVO_PERIOD", 500)
+    with pytest.raises(TimingViolation, match=r"t.bas line 4: process 1 ran 500 statements in the servo period from "
+                                              r"t = 0 ns to 0 ns; statements take no simulated time"):
         run_text("x = 0\nREPEAT\n  x = x + 1\nUNTIL x < 0\n")

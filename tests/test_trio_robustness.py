@@ -68,17 +68,30 @@ def test_nesting_up_to_the_limit_runs() -> None:
     assert trio.vr(0) == 65
 
 
-def test_a_program_that_never_waits_stops_at_100000_statements_at_one_instant() -> None:
-    """Twelve statements in a loop without a wait: the default guard (100000 statements at one instant, a
-    fraction of a second of wall time) stops it with the line and the advice to wait."""
+def test_a_program_that_never_waits_stops_at_100000_statements_in_a_servo_period() -> None:
+    """Twelve statements in a loop without a wait: the guard (100000 statements in one servo period, a fraction
+    of a second of wall time) stops it with the line and the advice to wait."""
     body = "".join(f"  v{k} = v{k} + 1\n" for k in range(10))
     text = "".join(f"v{k} = 0\n" for k in range(10)) + "REPEAT\n" + body + "UNTIL v0 < 0\nVR(0) = v1 + v2 + v3 + " \
         "v4 + v5 + v6 + v7 + v8 + v9\n"
     sim = Simulation(seed=1)
     BasicProgram.parse(text, name="busy.bas").start(TrioController(sim))
-    with pytest.raises(TimingViolation, match=r"^busy.bas line \d+: process 1 ran 100000 statements at t = 0 ns "
-                                              r"without waiting; .* \(wait with WAIT UNTIL, WAIT IDLE or WA\)$"):
+    with pytest.raises(TimingViolation, match=r"^busy.bas line \d+: process 1 ran 100000 statements in the servo "
+                                              r"period from t = 0 ns to 0 ns; .* \(wait with WAIT UNTIL, WAIT IDLE "
+                                              r"or WA\)$"):
         sim.run(until=MS)
+
+
+def test_a_loop_that_waits_a_few_ns_at_a_time_stops_within_its_servo_period() -> None:
+    """WA(0.000001) waits 1 ns: without a per-servo-period rule 30 ms of it took 30 million loops (minutes of wall
+    time in the long fuzz run); the loop (4 statements and 1 ns a turn) stops in the first servo period, at 100000
+    statements: 25000 ns."""
+    sim = Simulation(seed=1)
+    BasicProgram.parse("n = 0\nWHILE n >= 0\n  n = n + 1\n  WA(0.000001)\nWEND\n", name="crawl.bas").start(
+        TrioController(sim))
+    with pytest.raises(TimingViolation, match=r"^crawl.bas line \d+: process 1 ran 100000 statements in the servo "
+                                              r"period from t = 0 ns to 25000 ns"):
+        sim.run(until=30 * MS)
 
 
 def test_a_polling_loop_that_waits_each_servo_cycle_runs_for_ever() -> None:

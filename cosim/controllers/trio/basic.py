@@ -9,9 +9,10 @@ run at once (``RUN "NAME", process`` or :meth:`BasicProgram.start` with ``proces
 Timing: statements take no simulated time; a program only waits at ``WAIT IDLE``, ``WAIT LOADED``,
 ``WAIT UNTIL`` (checked at once, then at every servo tick), ``WA``, a move while the move buffer is
 full, and a ``PWM_CONTROL(3)`` while the FIFO is full. A process that runs
-:data:`MAX_STATEMENTS_PER_INSTANT` statements at one instant without waiting is stopped with an
+:data:`MAX_STATEMENTS_PER_SERVO_PERIOD` statements within one servo period is stopped with an
 error naming its line: statements take no time in this model, so a loop that polls without
-waiting would freeze the simulated clock (use ``WAIT UNTIL``).
+waiting (or waits a few ns at a time) would freeze the simulated clock or crawl along it (wait with
+``WAIT UNTIL``, which checks once per servo cycle, or ``WA``).
 
 Programs that run at the same instant run one after the other, each until it waits, in the order
 they became ready (deterministic).
@@ -41,8 +42,8 @@ from cosim.kernel import At
 from cosim.timebase import Priority
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
-#: Statements a process may run at one instant without waiting.
-MAX_STATEMENTS_PER_INSTANT = 100_000
+#: Statements a process may run within one servo period.
+MAX_STATEMENTS_PER_SERVO_PERIOD = 100_000
 #: Deepest GOSUB nesting.
 MAX_GOSUB_DEPTH = 64
 #: Longest console line [characters]; a longer one is written in parts.
@@ -234,18 +235,20 @@ class BasicRun:
         ops = self.program.compiled.ops
         try:
             yield self.sim.at(at, Priority.HOST)
-            pc, instant, used = 0, -1, 0
+            period = self.controller.period_ticks
+            pc, cycle, used = 0, -1, 0
             while 0 <= pc < len(ops):
                 now = self.sim.now
-                if now != instant:
-                    instant, used = now, 0
+                if now // period != cycle:
+                    cycle, used = now // period, 0
                 used += 1
                 self.pc = pc
-                if used > MAX_STATEMENTS_PER_INSTANT:
+                if used > MAX_STATEMENTS_PER_SERVO_PERIOD:
                     raise TimingViolation(
-                        f"process {self.number} ran {MAX_STATEMENTS_PER_INSTANT} statements at t = {now} ns without "
-                        "waiting; statements take no simulated time, so a loop that never waits would freeze it "
-                        "(wait with WAIT UNTIL, WAIT IDLE or WA)")
+                        f"process {self.number} ran {MAX_STATEMENTS_PER_SERVO_PERIOD} statements in the servo period "
+                        f"from t = {cycle * period} ns to {now} ns; statements take no simulated time, so a loop "
+                        "that does not wait for the servo cycle would freeze the clock (wait with WAIT UNTIL, "
+                        "WAIT IDLE or WA)")
                 pc = ops[pc](self, pc)
                 event, self.pending = self.pending, None
                 if event is not None and (isinstance(event, At) or not event.triggered):
