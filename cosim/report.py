@@ -6,6 +6,7 @@ chosen from the signals the trace holds:
 * pulse trains: pulse rate per millisecond;
 * ``*.buffer_level`` / ``*.fifo_level``: buffer fill over time;
 * ``*.gate`` against a ``*.position``/``*.dpos`` signal of the same axis: gate state over position;
+* ``<device>.axisN.gate`` with another moving ``<device>.axisM.dpos``: the XY path, where the gate was on;
 * ``laser.power`` / ``laser.energy``: optical power and energy;
 * ``*.timebase_pct`` and ``*.sync_error``: time base and synchronisation error.
 """
@@ -79,6 +80,40 @@ def _draw_gate(ax: Any, tp: np.ndarray, p: np.ndarray, tg: np.ndarray, g: np.nda
     ax.legend(fontsize=7)
 
 
+def _draw_path(ax: Any, x: np.ndarray, y: np.ndarray, on: np.ndarray, x_name: str, y_name: str) -> None:
+    ax.plot(x, y, lw=0.6, color="0.65", label="path")
+    ax.plot(np.where(on, x, np.nan), np.where(on, y, np.nan), lw=1.8, color="tab:red", label="gate on")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(x_name)
+    ax.set_ylabel(y_name)
+    ax.legend(fontsize=7)
+
+
+def _path_plot(trace: Trace, gate: str) -> tuple[str, str] | None:
+    """The XY path of a gated axis (X) and another moving axis of the device (Y), with the gate on."""
+    axis = gate.rsplit(".", 1)[0]
+    device, _, leaf = axis.rpartition(".")
+    x_name = f"{axis}.dpos"
+    if not leaf.startswith("axis") or x_name not in trace.info:
+        return None
+    others = [n for n in trace.info if n.startswith(f"{device}.axis") and n.endswith(".dpos") and n != x_name]
+    moving = [n for n in others if np.unique(trace.edges(n)[1]).size > 1]
+    if not moving or np.unique(trace.edges(x_name)[1]).size < 2:
+        return None
+    y_name = moving[0]
+    tx, vx = trace.edges(x_name)
+    ty, vy = trace.edges(y_name)
+    tg, g = trace.edges(gate)
+    t = np.union1d(np.union1d(tx, ty), tg)
+    held = [v[np.clip(np.searchsorted(tt, t, side="right") - 1, 0, None)] for tt, v in ((tx, vx), (ty, vy), (tg, g))]
+    x, y, on = held[0], held[1], held[2] > 0
+    if not on.any():
+        return None
+    index = np.linspace(0, t.size - 1, min(t.size, MAX_POINTS)).astype(np.int64)
+    return f"{gate}: path", _figure_png(partial(_draw_path, x=x[index], y=y[index], on=on[index], x_name=x_name,
+                                                y_name=y_name), title=f"XY path ({x_name}, {y_name}) and {gate}")
+
+
 _VALUE_LEAVES = ("buffer_level", "fifo_level", "power", "energy", "timebase_pct", "sync_error",
                  "following_error", "slip_counts", "pwm_mark")
 
@@ -112,6 +147,9 @@ def _plots(trace: Trace) -> Iterator[tuple[str, str]]:
                 yield f"{name} against {position}", _figure_png(
                     partial(_draw_gate, tp=tp, p=p, tg=tg, g=g, ms=ms, position=position),
                     title=f"{name} edges on {position}")
+            path = _path_plot(trace, name)
+            if path is not None:
+                yield path
 
 
 def _check_rows(result: dict[str, Any]) -> str:

@@ -167,11 +167,15 @@ class StepDirPort:
     reversed : bool
         True when the pin is inverted relative to the count (a PoKeys axis with
         ``invert_direction``): the motor then turns opposite to the counted direction.
+    active_delay : int
+        Ticks from a recorded pulse instant (its leading edge) to its active edge, where a drive
+        counts it (0: at the instant; a Trio step output: the step pulse width).
     """
 
     step: PulseTrain
     direction: Signal
     reversed: bool = False
+    active_delay: int = 0
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,9 @@ from cosim.kernel import Simulation
 
 MS = 1_000_000
 PERIOD = Fraction(1, 1000)  # SERVO_PERIOD = 1 ms
+#: TRM 8-165: the falling edge of a step pulse is the active edge; the pulse falls 100 ns (the model's
+#: default step pulse width) after it starts, so a step is counted 100 ns after its leading edge.
+ACTIVE = 100
 
 
 # -- the note's example, against a closed form written here (not the model's profile code) ---------
@@ -47,10 +50,10 @@ def closed_form_position(length: Fraction, speed: Fraction, accel: Fraction,
 
 
 def edge_time(t_start: int, steps: list[int], n: int) -> int:
-    """Instant of the n-th step of a move whose step count after cycle j is steps[j+1]."""
+    """Active (falling) edge of the n-th step of a move whose step count after cycle j is steps[j+1]."""
     j = next(j for j in range(len(steps) - 1) if steps[j + 1] >= n)
     before, count = steps[j], steps[j + 1] - steps[j]
-    return t_start + j * MS + ((n - before - 1) * MS) // count
+    return t_start + j * MS + ((n - before - 1) * MS) // count + ACTIVE
 
 
 @pytest.mark.parametrize(("speed", "accel", "decel"), [
@@ -66,7 +69,8 @@ def test_note_example_gates_at_the_exact_counts_and_pulse_times(speed: int, acce
     reverse 300 -> 0:   LT 220 195 115 110  -> counts 3519 3119 1839 1759  (ON OFF ON OFF)
 
     The program starts at t = 0 after the servo tick; MOVEABS(300) is loaded at 1 ms; WAIT IDLE
-    returns at the tick after the move's last cycle, and MOVEABS(0) is loaded one tick later.
+    returns at the tick after the move's last cycle, and MOVEABS(0) is loaded one tick later. Each
+    gate edge is at the active (falling) edge of the pulse that reaches its count.
     """
     sim = Simulation(seed=1)
     trio = TrioController(sim)
@@ -140,7 +144,7 @@ TABLE(20, k, i)
 """)
     assert trio.table_memory[10:16] == [Fraction(17, 2), 17, 31, Fraction(-25, 2), 3, -2]
     assert trio.get_param("PWM_MARK", axis=3) == 93 and trio.get_param("PWM_CYCLE", axis=3) == 1000
-    assert trio.get_param("UNITS", axis=2) == 4 and trio.vr_memory == {7: 17}
+    assert trio.get_param("UNITS", axis=2) == 4 and trio.vr(7) == 17 and sum(trio.vr_memory) == 17
     assert trio.table_memory[20:22] == [4, 7]
 
 
@@ -160,8 +164,8 @@ def test_wait_until_is_checked_at_every_servo_tick() -> None:
                     until_ms=400)
     t_on = int(trio.sim.trace.edges("trio.wdog")[0][-1])
     tp, _ = trio.sim.trace.pulses("trio.axis3.step")
-    first_tick = (int(tp[10]) // MS + 1) * MS if int(tp[10]) % MS else int(tp[10])  # the 11th pulse: MPOS 5.5
-    assert t_on == first_tick
+    counted = int(tp[10]) + ACTIVE  # the 11th pulse (MPOS 5.5) counts at its active edge
+    assert t_on == -(-counted // MS) * MS  # the first servo tick at or after it
 
 
 def test_wa_waits_milliseconds() -> None:
@@ -170,19 +174,22 @@ def test_wa_waits_milliseconds() -> None:
 
 
 @pytest.mark.parametrize(("text", "message"), [
-    ("MOVE(1\n", r"t.bas line 1: syntax error at column 7, unexpected end of line"),
-    ("BASE(3)\nUNITS==3\n", r"t.bas line 2: syntax error at column 7, unexpected '='"),
-    ("BASE(3)\n\nMOVX(3)\n", r"t.bas line 3: unknown keyword MOVX; did you mean MOVE\?"),
-    ("UNIT=16\n", r"t.bas line 1: unknown keyword UNIT; did you mean UNITS.*assigned but never read"),
-    ("x = SPED + 1\nVR(1) = x\n", r"t.bas line 1: unknown keyword SPED; did you mean SPEED"),
-    ("DPOS=3\n", r"t.bas line 1: DPOS is read-only \(use DEFPOS\)"),
-    ("SERVO_PERIOD=500\n", r"t.bas line 1: SERVO_PERIOD is read-only"),
-    ("x = MOVE(3)\nVR(1)=x\n", r"t.bas line 1: MOVE\(...\) is a command, not a function"),
-    ("VR(3)\n", r"t.bas line 1: VR\(...\) is a function, not a command"),
-    ("TABLE(3)\n", r"t.bas line 1: TABLE\(n\) reads a location; write TABLE\(start, value, ...\)"),
-    ("UNITS\n", r"t.bas line 1: UNITS is a parameter; write UNITS = value"),
-    ("WDOG AXIS(3) = ON\n", r"t.bas line 1: WDOG is not an axis parameter"),
-    ("IF 1 THEN\n  FOO\nENDIF\n", r"t.bas line 2: unknown keyword FOO"),
+    ("MOVE(1\n", r"t.bas line 1, column 7: syntax error, unexpected end of line \(expected: \), .*\n    MOVE\(1$"),
+    ("BASE(3)\nUNITS==3\n", r"t.bas line 2, column 7: syntax error, unexpected '='"),
+    ("BASE(3)\n\nMOVX(3)\n", r"t.bas line 3, column 1: unknown keyword MOVX; did you mean MOVE\? \(supported "
+                            r"commands: BASE, CANCEL, DEFPOS, FORWARD, MOVE, MOVEABS, MOVECIRC, OP, PWM_CONTROL, "
+                            r"REVERSE, TABLE, WA; see docs/trio.md\)"),
+    ("UNIT=16\n", r"t.bas line 1, column 1: unknown keyword UNIT; did you mean UNITS.*assigned but never read"),
+    ("x = SPED + 1\nVR(1) = x\n", r"t.bas line 1, column 5: unknown keyword SPED; did you mean SPEED"),
+    ("DPOS=3\n", r"t.bas line 1, column 1: DPOS is read-only \(use DEFPOS\)"),
+    ("SERVO_PERIOD=500\n", r"t.bas line 1, column 1: SERVO_PERIOD is read-only"),
+    ("x = MOVE(3)\nVR(1)=x\n", r"t.bas line 1, column 5: MOVE\(...\) is a command, not a function"),
+    ("VR(3)\n", r"t.bas line 1, column 1: VR\(...\) is a function, not a command"),
+    ("TABLE(3)\n", r"t.bas line 1, column 1: number of TABLE arguments = 1 is not allowed \(allowed: 2 or more: "
+                   r"TABLE\(start, value, value, ...\)\)"),
+    ("UNITS\n", r"t.bas line 1, column 1: UNITS is a parameter; write UNITS = value"),
+    ("WDOG AXIS(3) = ON\n", r"t.bas line 1, column 1: WDOG is not an axis parameter"),
+    ("IF 1 THEN\n  FOO\nENDIF\n", r"t.bas line 2, column 3: unknown keyword FOO"),
 ])
 def test_program_errors_are_found_before_running_with_line_numbers(text: str, message: str) -> None:
     with pytest.raises(ConfigurationError, match=message):
@@ -202,7 +209,7 @@ def test_run_time_errors_carry_the_line_number(text: str, error: type[Exception]
 
 
 def test_a_loop_that_never_waits_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(basic, "MAX_LOOPS_PER_INSTANT", 500)
-    with pytest.raises(TimingViolation, match=r"t.bas line 4: the loop starting at line 2 ran 500 times at "
-                                              r"t = 0 ns without waiting"):
+    monkeypatch.setattr(basic, "MAX_STATEMENTS_PER_SERVO_PERIOD", 500)
+    with pytest.raises(TimingViolation, match=r"t.bas line 4: process 1 ran 500 statements in the servo period from "
+                                              r"t = 0 ns to 0 ns; statements take no simulated time"):
         run_text("x = 0\nREPEAT\n  x = x + 1\nUNTIL x < 0\n")

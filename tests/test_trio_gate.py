@@ -10,12 +10,15 @@ import numpy as np
 import pytest
 
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
-from cosim.controllers.trio.params import FIFO_DEPTH, PWM_ENCODER_MODULUS
+from cosim.controllers.trio.params import FIFO_DEPTH
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.timebase import Priority
 
 MS = 1_000_000
+#: TRM 8-165: a step pulse's falling edge is the active one; with the model's default pulse width it comes 100 ns
+#: after the leading edge that the trace records. PWM_ENCODER and the gate count there.
+ACTIVE = 100
 
 
 def gated_axis(sim: Simulation, *, units: int = 16, speed: int = 100, encoder_at_atype: int | None = 0,
@@ -54,8 +57,8 @@ def gate_edges(sim: Simulation) -> list[tuple[int, int, int]]:
 
 
 def pulse_time(sim: Simulation, n: int) -> int:
-    """Instant of the n-th step pulse (1-based) of the run."""
-    return int(sim.trace.pulses("trio.axis3.step")[0][n - 1])
+    """Active (falling) edge of the n-th step pulse (1-based) of the run."""
+    return int(sim.trace.pulses("trio.axis3.step")[0][n - 1]) + ACTIVE
 
 
 def test_gt_fires_at_the_exact_pulse_of_the_first_count_above_position_times_units(sim: Simulation) -> None:
@@ -90,7 +93,7 @@ def test_lt_fires_at_the_first_count_below(sim: Simulation) -> None:
 
     run_job(sim, job(), 5000)
     t_p, _ = sim.trace.pulses("trio.axis3.step")
-    back = {3200 - k: int(t) for k, t in enumerate(t_p[3200:], start=1)}  # count reached by each reverse pulse
+    back = {3200 - k: int(t) + ACTIVE for k, t in enumerate(t_p[3200:], start=1)}  # count reached, reverse pulses
     assert gate_edges(sim) == [(back[1760], 1, 1760), (back[1759], 0, 1759), (back[799], 1, 799)]
 
 
@@ -196,25 +199,58 @@ def test_pwm_encoder_counts_step_pulses_and_ignores_defpos_until_cleared(sim: Si
     assert log == [(100, 0), (0, 0)]
 
 
+#: TN20-81: "A dedicated 29 bit encoder hardware register": values 0 .. 2**29 - 1 = 536870911.
+ENCODER_WRAP = 536_870_912
+
+
 def test_pwm_encoder_is_29_bit_and_the_compare_works_across_its_wrap(sim: Simulation) -> None:
-    """ATYPE=35 left PWM_ENCODER at 2**29 - 40 (not cleared); GT 1 fires when it reads 2 (42 pulses on),
-    and on the way back LT -20 fires when it reads 2**29 - 21 (19 pulses from the start)."""
-    trio, p = gated_axis(sim, units=1, encoder_at_atype=PWM_ENCODER_MODULUS - 40, clear=False)
+    """ATYPE=35 left PWM_ENCODER at 536870872 (2**29 - 40, not cleared); GT 1 fires when it reads 2 (42 pulses
+    on), and on the way back LT -20 fires when it reads 536870891 (2**29 - 21, 19 pulses from the start)."""
+    trio, p = gated_axis(sim, units=1, encoder_at_atype=536_870_872, clear=False)
     p.table(0, 1, -20)
-    assert trio.get_param("PWM_ENCODER", axis=3) == PWM_ENCODER_MODULUS - 40
+    assert trio.get_param("PWM_ENCODER", axis=3) == 536_870_872
+    readings: list[Fraction] = []
 
     def job() -> Generator[Any, Any, None]:
         yield p.pwm_control(3, 1, ON, 0, 0)
         yield p.pwm_control(3, 0, OFF, 1, 1)
         yield p.move(50)
         yield p.wait_idle()
+        readings.append(trio.get_param("PWM_ENCODER", axis=3))
         yield p.move(-50)
 
     run_job(sim, job(), 1500)
-    assert trio.get_param("PWM_ENCODER", axis=3) == PWM_ENCODER_MODULUS - 40
+    assert readings == [10]  # 536870872 + 50 wraps past 536870911 to 0: 536870922 - 536870912 = 10
+    assert trio.get_param("PWM_ENCODER", axis=3) == 536_870_872
     edges = gate_edges(sim)
-    assert [(level, count) for _, level, count in edges] == [(1, 42), (0, 19)]  # LT -20: reads 2**29 - 21
+    assert [(level, count) for _, level, count in edges] == [(1, 42), (0, 19)]  # LT -20: reads 536870891
     assert edges[0][0] == pulse_time(sim, 42)
+
+
+@pytest.mark.parametrize(("start", "moved", "reads"), [
+    (536_870_911, 1, 0),            # the largest 29-bit value, one pulse on: 0
+    (536_870_911, -1, 536_870_910),
+    (0, -1, 536_870_911),           # below 0: the largest value (a 28-bit register would read 268435455)
+    (268_435_455, 1, 268_435_456),  # 2**28 - 1 + 1 fits 29 bits (a 28-bit register would wrap to 0)
+])
+def test_pwm_encoder_wraps_at_2_to_the_29(sim: Simulation, start: int, moved: int, reads: int) -> None:
+    trio, p = gated_axis(sim, units=1, encoder_at_atype=start, clear=False)
+
+    def job() -> Generator[Any, Any, None]:
+        yield p.move(moved)
+
+    run_job(sim, job(), 100)
+    assert trio.get_param("PWM_ENCODER", axis=3) == reads
+
+
+@pytest.mark.parametrize(("value", "accepted"), [(536_870_911, True), (536_870_912, False)])
+def test_the_power_up_encoder_value_must_fit_29_bits(value: int, accepted: bool) -> None:
+    if accepted:
+        assert TrioController(Simulation(), encoder_at_atype=value).encoder_at_atype == 536_870_911
+    else:
+        with pytest.raises(ConfigurationError, match=r"encoder_at_atype = 536870912 is not allowed \(allowed: "
+                                                     r"0..536870911"):
+            TrioController(Simulation(), encoder_at_atype=value)
 
 
 def test_positions_passed_before_they_were_loaded_fire_at_the_load_and_are_reported(sim: Simulation) -> None:
@@ -249,7 +285,7 @@ def test_atype_35_leaves_an_arbitrary_encoder_value_drawn_from_the_seeded_rng() 
         trio.set_param("ATYPE", 35, axis=2)
         values.append(int(trio.get_param("PWM_ENCODER", axis=2)))
     assert values[0] == values[1] != values[2]
-    assert all(0 <= v < PWM_ENCODER_MODULUS for v in values)
+    assert all(0 <= v < ENCODER_WRAP for v in values)  # TN20-81: a 29-bit register
 
 
 @pytest.mark.parametrize(("args", "message"), [

@@ -22,6 +22,7 @@ from cosim.checks.base import Check, Clock, Findings
 from cosim.checks.direction import DirectionSetup
 from cosim.checks.duration import Duration, EdgeRef, PulseRef
 from cosim.checks.edge_position import EdgeAtPosition
+from cosim.checks.energy import EnergyPerLength
 from cosim.checks.levels import Bound, IntervalsAbove, IntervalsBelow, NoUnderrun, ValueAt
 from cosim.checks.pulse_timing import MaxPulseRate, MinPulseSpacing, PulsesPerWindow
 from cosim.checks.result import MAX_REPORTED, CheckResult, Violation
@@ -36,6 +37,7 @@ __all__ = [
     "Duration",
     "EdgeAtPosition",
     "EdgeRef",
+    "EnergyPerLength",
     "Findings",
     "IntervalsAbove",
     "IntervalsBelow",

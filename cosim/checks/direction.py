@@ -35,6 +35,9 @@ class DirectionSetup(Check):
         Shortest allowed time from the last direction change to a pulse [ticks], >= 0.
     positive_level : {1, 0}
         The direction level that means a positive pulse (``dir`` 1). Default 1.
+    active_delay : int
+        Ticks from a recorded pulse to its active edge, where the drive counts it (a Trio step
+        output: the step pulse width); the set-up is measured to the active edge. Default 0.
 
     Notes
     -----
@@ -55,9 +58,11 @@ class DirectionSetup(Check):
     direction: str
     setup: int
     positive_level: int = 1
+    active_delay: int = 0
 
     def __post_init__(self) -> None:
         validate.integer(self.setup, "setup", low=0, unit="ticks", kind=TICKS, where=self.where)
+        validate.integer(self.active_delay, "active_delay", low=0, unit="ticks", kind=TICKS, where=self.where)
         validate.integer(self.positive_level, "positive_level", low=0, high=1, allowed="0, 1", kind="an integer",
                          where=self.where)
 
@@ -73,7 +78,8 @@ class DirectionSetup(Check):
                                                 f"(level {self.positive_level} = dir 1)")
         shortest: int | None = None
         setup_violations = mismatches = 0
-        for t, d in pulse_chunks(trace, self.step, self):
+        for recorded, d in pulse_chunks(trace, self.step, self):
+            t = recorded + self.active_delay
             value, defined, changed_at, changed = held.at(t)
             undefined = ~defined
             level = (value != 0).astype(np.int8)

@@ -46,6 +46,8 @@ the run: there the rate returns to 0 and ``commanded_steps`` is recorded.
 
 The pulses' sign follows the direction *pin*, as a driver sees it: with a port whose pin is
 ``reversed`` relative to the count, the motor turns the other way (and counts ``-position``).
+Where a drive counts a pulse at its active edge, after the recorded instant (a Trio step output:
+the port's ``active_delay`` is the pulse width), every segment reaches the plant that much later.
 
 Roles (plant variables, with the Stepper FMU's names as defaults): ``step_rate`` [pulses/s] and
 ``step_phase`` [1] inputs; ``step_segments`` input (optional: without it the rate way is used);
@@ -394,7 +396,10 @@ def couple_stepper(port: StepDirPort, plant: PlantLike, *,
         coupling._capacity = 3 * shape[0]
         coupling._write = plant.ahead_writer(segments, coupling._array)
         plant.before_step(coupling.before_step)
-    port.step.subscribe(coupling.on_segment)
+    delay = port.active_delay
+    port.step.subscribe(coupling.on_segment if not delay else  # the drive counts at the active edge
+                        lambda train, t0, duration, count, direction:
+                        coupling.on_segment(train, t0 + delay, duration, count, direction))
     return coupling
 
 

@@ -10,13 +10,14 @@ with the gating FIFO loaded before each move::
     gate       ___________|‾‾‾|___________|‾‾‾‾‾‾‾|___________
 
 Checks: every gate edge at the exact step count (GT: first count above position*UNITS, LT: first
-count below) for every pass, no position loaded too late, and the PWM at 20 kHz / 400 clocks.
+count below) for every pass, no position loaded too late, the PWM at 20 kHz / 400 clocks, and the
+direction output steady for the pulse width before the active (falling) edge of every step pulse.
 With ``laser`` the output drives the Laser FMU and the energy per pass is a key figure.
 """
 
 from __future__ import annotations
 
-from cosim.checks import EdgeAtPosition, ValueAt
+from cosim.checks import DirectionSetup, EdgeAtPosition, ValueAt
 from cosim.controllers.trio import TrioController
 from cosim.controllers.trio.basic import example
 from cosim.couplings.laser import couple_laser
@@ -66,6 +67,9 @@ def scenario(run: Run) -> None:
     run.check(ValueAt("trio.axis3.pwm_mark", None, 400, name="PWM_MARK 400"))
     run.check(ValueAt("trio.wdog", None, 1, name="WDOG on"))
     run.check(ValueAt("trio.axis3.dpos", None, 0, name="the axis is back at 0"))
+    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", trio.setup_ticks,
+                             active_delay=trio.pulse_width_ticks,
+                             name="axis 3: direction steady before the active edge of every step pulse"))
     run.figure("late_positions", lambda: len(trio.gate(3).late))
     run.figure("step_pulses", lambda: int(sim.trace.segments("trio.axis3.step")["count"].sum()))
     run.figure("job_s", lambda: sim.timebase.seconds(sim.now), "s")

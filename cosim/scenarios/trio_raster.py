@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
-from cosim.checks import Check, Clock, EdgeAtPosition
+from cosim.checks import Check, Clock, DirectionSetup, EdgeAtPosition
 from cosim.checks.base import Findings, fmt, records
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
@@ -87,8 +87,8 @@ class LatePositions(Check):
         return found
 
 
-def raster_job(run: Run) -> RasterJob:
-    """Set up the controller, run the job to its end and declare its figures; returns the job."""
+def raster_job(run: Run) -> tuple[RasterJob, TrioController]:
+    """Set up the controller, run the job to its end and declare its figures; returns the job and the controller."""
     sim, p = run.sim, run.p
     trio = TrioController(sim)
     proc = TrioProcess(trio, base=(3,))
@@ -126,12 +126,22 @@ def raster_job(run: Run) -> RasterJob:
     run.figure("late_positions", lambda: len(trio.gate(3).late))
     run.figure("most_positions_waiting", float(waiting.max()))
     run.figure("job_s", sim.timebase.seconds(sim.now), "s")
-    return job
+    return job, trio
+
+
+def check_direction_setup(run: Run, trio: TrioController, job: RasterJob) -> None:
+    """The direction outputs of the raster axes (Y moves only between lines) are steady before the active edge
+    of every step pulse."""
+    for a in (3, 2) if job.lines > 1 else (3,):
+        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", trio.setup_ticks,
+                                 active_delay=trio.pulse_width_ticks,
+                                 name=f"axis {a}: direction steady before the active edge of every step pulse"))
 
 
 def scenario(run: Run) -> None:
-    job = raster_job(run)
+    job, trio = raster_job(run)
     run.check(EdgeAtPosition("trio.axis3.gate", "trio.axis3.step", job.expected_edges(Fraction(UNITS)), tol_counts=0,
                              name="every programmed position gives its gate edge at the exact count"))
     run.check(LatePositions("trio.axis3.gate_late", programmed=job.lines * job.positions,
                             name="no position is passed before it is loaded"))
+    check_direction_setup(run, trio, job)

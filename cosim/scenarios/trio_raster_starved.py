@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from cosim.checks import ValueAt
 from cosim.scenario import Param, Run
-from cosim.scenarios.trio_raster import LatePositions, raster_job
+from cosim.scenarios.trio_raster import LatePositions, check_direction_setup, raster_job
 
 PARAMETERS = (
     Param("lines", 2, "", (1, 7), "raster lines (alternating direction)"),
@@ -30,7 +30,8 @@ UNTIL = "100 ms"
 
 
 def scenario(run: Run) -> None:
-    job = raster_job(run)
+    job, trio = raster_job(run)
     run.check(LatePositions("trio.axis3.gate_late", programmed=job.lines * job.positions, expect_late=True,
                             name="starving reproduced: positions passed before they were loaded are reported"))
     run.check(ValueAt("trio.axis3.fifo_level", None, 0, name="every loaded position was used"))
+    check_direction_setup(run, trio, job)

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from cosim.checks import Bound, Check, Clock
+from cosim.checks import Bound, Check, Clock, DirectionSetup
 from cosim.checks.base import Findings, held_index, records
 from cosim.checks.result import Violation
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
@@ -135,6 +135,10 @@ def scenario(run: Run) -> None:
                                 name="energy per mm at the corners " + (
                                     "matches cruise (link)" if p.link else "exceeds cruise (no link)")))
     run.check(Bound("trio.axis2.dpos", lower=0, upper=40, name="the path stays inside the triangle (x)"))
+    for a in (2, 3):
+        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", trio.setup_ticks,
+                                 active_delay=trio.pulse_width_ticks,
+                                 name=f"axis {a}: direction steady before the active edge of every step pulse"))
     run.figure("energy_per_mm_J", lambda: energy_per_mm(sim.trace, fixed_mark=None, period=period), "J/mm")
     run.figure("energy_per_mm_fixed_mark_J", lambda: energy_per_mm(sim.trace, fixed_mark=p.limit, period=period),
                "J/mm")

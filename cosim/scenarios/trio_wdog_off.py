@@ -19,7 +19,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
-from cosim.checks import EdgeAtPosition, IntervalsAbove, ValueAt
+from cosim.checks import DirectionSetup, EdgeAtPosition, IntervalsAbove, ValueAt
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
 from cosim.couplings.laser import couple_laser
 from cosim.plants.laser import pwm_energy
@@ -71,6 +71,9 @@ def scenario(run: Run) -> None:
     run.check(ValueAt("trio.axis3.dpos", None, 200, name="the axis runs on to 200 mm"))
     run.check(EdgeAtPosition("trio.axis3.gate", "trio.axis3.step", [(20 * UNITS + 1, 1), (180 * UNITS + 1, 0)],
                              tol_counts=0, name="the gate still switches at 20 and 180 mm"))
+    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", trio.setup_ticks,
+                             active_delay=trio.pulse_width_ticks,
+                             name="axis 3: direction steady before the active edge of every step pulse"))
     if p.laser:
         preset = load_preset(PRESET)
         t_gate, level = sim.trace.edges("trio.axis3.gate")

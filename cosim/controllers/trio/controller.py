@@ -1,17 +1,19 @@
-"""The Trio EURO205X Motion Coordinator: servo cycle, parameters, TABLE and commands.
+"""The Trio EURO205X Motion Coordinator: servo cycle, parameters, TABLE, VR, I/O and commands.
 
-:class:`TrioController` owns the axes, TABLE memory and WDOG, and runs the servo cycle as a SimPy
-process at ``k * SERVO_PERIOD`` (priority SERVO). Each servo tick, in this order:
+:class:`TrioController` owns the axes, TABLE and VR memory, the digital I/O, the console and WDOG,
+and runs the servo cycle as a SimPy process at ``k * SERVO_PERIOD`` (priority SERVO). Each servo
+tick, in this order:
 
 1. latch MPOS of every axis (the pulses counted so far);
 2. move waiting ``PWM_CONTROL(3)`` loads into FIFOs that now have room;
-3. end moves whose last cycle was output; load buffered moves whose axes are free;
-4. run one cycle of every move: demand positions, VP_SPEED, step pulses (:mod:`.motion`);
+3. end moves whose last cycle was output; load buffered moves whose axes are free (:mod:`.buffer`);
+4. run one cycle of every move (a requested CANCEL first): demand positions, VP_SPEED, step
+   pulses (:mod:`.motion`);
 5. apply pending DEFPOS offsets (after loading moves: a move issued right after DEFPOS is
    loaded before the new position applies, as the Trio manual warns; ``WAIT UNTIL OFFPOS=0``);
 6. update speed-linked PWM marks from VP_SPEED of their link axis;
 7. check FE_LIMIT, record DPOS, MPOS, VP_SPEED, then release programs waiting for move-buffer
-   space or for idle axes.
+   space, for idle axes or for an empty next-move buffer.
 
 Commands come from programs (:class:`TrioProcess`, the BASIC interpreter); they take effect at
 the instant they are given, in zero simulated time. Moves are buffered one deep per axis (the
@@ -20,7 +22,6 @@ running move and one more); a further move makes its program wait.
 
 from __future__ import annotations
 
-from collections import deque
 from collections.abc import Generator, Sequence
 from fractions import Fraction
 from typing import Any
@@ -28,15 +29,23 @@ from typing import Any
 from simpy.events import Event
 
 from cosim import validate
+from cosim.controllers.trio.buffer import MoveBuffers
 from cosim.controllers.trio.gate import GateFifo, toggled_entries
+from cosim.controllers.trio.io import Console, DigitalIo
 from cosim.controllers.trio.motion import Axis, Move
 from cosim.controllers.trio.outputs import SettledSignal
 from cosim.controllers.trio.params import (
     ATYPE_STEPPER_PWM,
+    ATYPE_VIRTUAL,
     AXIS_PARAMS,
+    DEFAULT_DIR_SETUP_NS,
+    DEFAULT_IO_CHANNELS,
     DEFAULT_SERVO_PERIOD_US,
+    DEFAULT_STEP_PULSE_WIDTH_NS,
     DEFAULT_TABLE_SIZE,
+    DEFAULT_VR_SIZE,
     FIFO_DEPTH,
+    FIRST_OUTPUT,
     PWM_AXES,
     PWM_CLOCK_HZ,
     PWM_ENCODER_MODULUS,
@@ -47,6 +56,7 @@ from cosim.controllers.trio.params import (
     on_off,
     unknown_name,
 )
+from cosim.controllers.trio.paths import ArcPath
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.kernel import Simulation
@@ -70,35 +80,60 @@ class TrioController:
         Number of axes (4 by default; must include axes 2 and 3).
     table_size : int
         TABLE entries (16000 by default).
+    vr_size : int
+        VR globals, ``VR(0)..VR(vr_size - 1)`` (1024 by default).
     encoder_at_atype : int, optional
         Raw PWM_ENCODER value an axis shows after ATYPE=35 (the note: "will often have a value");
         default: drawn from ``sim.rng``, so programs must clear it with PWM_CONTROL(6).
+    step_pulse_width_ns : int
+        Step pulse width [ns]: from a pulse's leading edge to its active (trailing) edge, where
+        it is counted (100 ns by default).
+    dir_setup_ns : int
+        Direction set-up [ns] from a change of the direction output to the leading edge of the
+        next step pulse (0 by default: the direction changes with the leading edge, so the
+        set-up before the active edge is the pulse width).
     device : str
         Trace device name (``trio``).
     """
 
     def __init__(self, sim: Simulation, *, servo_period_us: int = DEFAULT_SERVO_PERIOD_US, n_axes: int = 4,
-                 table_size: int = DEFAULT_TABLE_SIZE, encoder_at_atype: int | None = None,
-                 device: str = "trio") -> None:
+                 table_size: int = DEFAULT_TABLE_SIZE, vr_size: int = DEFAULT_VR_SIZE,
+                 encoder_at_atype: int | None = None, step_pulse_width_ns: int = DEFAULT_STEP_PULSE_WIDTH_NS,
+                 dir_setup_ns: int = DEFAULT_DIR_SETUP_NS, device: str = "trio") -> None:
         self.sim = sim
         self.servo_period_us = check_servo_period_us(servo_period_us)
         self.period_ticks = sim.ticks(self.servo_period_us, "us", name="SERVO_PERIOD")
         self.period_s = Fraction(self.servo_period_us, 10**6)
         n_axes = validate.integer(n_axes, "n_axes", low=max(PWM_AXES) + 1, high=64)
         table_size = validate.integer(table_size, "table_size", low=1, unit="entries")
+        vr_size = validate.integer(vr_size, "vr_size", low=1, high=1 << 20, unit="variables")
         self.device = device
         self.encoder_at_atype = None if encoder_at_atype is None else validate.integer(
             encoder_at_atype, "encoder_at_atype", low=0, high=PWM_ENCODER_MODULUS - 1, unit="(raw PWM_ENCODER)")
-        self.axes = {n: Axis(sim, n, pwm=n in PWM_AXES, device=device) for n in range(n_axes)}
+        width_ns = validate.integer(step_pulse_width_ns, "step_pulse_width_ns", low=1, high=10**6, unit="ns")
+        self.pulse_width_ticks = sim.ticks(width_ns, "ns", name="step_pulse_width_ns")
+        setup_ns = validate.integer(dir_setup_ns, "dir_setup_ns", low=0, high=10**6, unit="ns")
+        self.dir_setup_ticks = sim.ticks(setup_ns, "ns", name="dir_setup_ns")
+        self.axes = {n: Axis(sim, n, pwm=n in PWM_AXES, device=device, pulse_width=self.pulse_width_ticks,
+                             dir_setup=self.dir_setup_ticks) for n in range(n_axes)}
         self.table_memory = [Fraction(0)] * table_size
-        self.vr_memory: dict[int, Fraction] = {}
+        self.vr_memory: list[int | Fraction] = [0] * vr_size
+        self.io = DigitalIo(sim, device, channels=DEFAULT_IO_CHANNELS, first_output=FIRST_OUTPUT)
+        self.console = Console(sim, device)
         self.wdog = SettledSignal(sim, f"{device}.wdog", kind="bit",
                                   description="WDOG: drive enable; OFF switches the PWM outputs off")
-        self._queued: list[Move] = []
-        self._move_waiters: deque[tuple[Move, Event]] = deque()
-        self._idle_waiters: list[tuple[tuple[int, ...], Event]] = []
+        self.buffers = MoveBuffers(sim, self.axes)
+        #: Running programs by process number, and the programs RUN can start by name.
+        self.processes: dict[int, Any] = {}
+        self.programs: dict[str, Any] = {}
+        self.wired: set[int] = set()
         self.ticks = 0
         sim.process(self.servo_cycle())
+
+    @property
+    def setup_ticks(self) -> int:
+        """Direction set-up before the active edge of a step pulse [ticks]: dir_setup + the pulse width."""
+        return self.dir_setup_ticks + self.pulse_width_ticks
 
     # -- the servo cycle ----------------------------------------------------------------------
     def servo_cycle(self) -> Generator[Event, Any, None]:
@@ -118,25 +153,8 @@ class TrioController:
         for axis in axes:
             if axis.gate is not None:
                 axis.gate.retry_waiting()
-        for axis in axes:
-            if axis.current is not None and axis.current.done:
-                axis.current = None
-        for move in list(self._queued):
-            if all(self.axes[a].current is None for a in move.axes):
-                move.load(self.axes, now)
-                for a in move.axes:
-                    self.axes[a].current, self.axes[a].queued = move, None
-                self._queued.remove(move)
-        running: dict[int, Move] = {}
-        for axis in axes:
-            axis.vp_speed = Fraction(0)
-            if axis.current is not None:
-                running[id(axis.current)] = axis.current
-        for move in running.values():
-            demands, speed = move.advance(self.period_s)
-            for a, demand in zip(move.axes, demands, strict=True):
-                self.axes[a].vp_speed = speed
-                self.axes[a].output_cycle(now, self.period_ticks, demand)
+        self.buffers.load(now)
+        self.buffers.run_cycle(now, self.period_ticks, self.period_s)
         for axis in axes:
             axis.apply_offset()
         for axis in axes:
@@ -145,30 +163,18 @@ class TrioController:
         for axis in axes:
             self._check_following_error(axis)
             axis.record()
-        self._release_waiters()
+        self.buffers.release()
 
     def _check_following_error(self, axis: Axis) -> None:
         if not (axis.stepper and axis.params["SERVO"]):
             return
         error = axis.dpos - axis.mpos_sampled
         if abs(error) > axis.params["FE_LIMIT"]:
+            origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
             raise TimingViolation(
-                f"{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
+                f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
                 f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
                 "motion error)")
-
-    def _release_waiters(self) -> None:
-        while self._move_waiters and self._can_queue(self._move_waiters[0][0]):
-            move, done = self._move_waiters.popleft()
-            self._queue(move)
-            done.succeed()
-        still = []
-        for axes, done in self._idle_waiters:
-            if all(self.axes[a].idle for a in axes):
-                done.succeed()
-            else:
-                still.append((axes, done))
-        self._idle_waiters = still
 
     # -- axes and parameters ------------------------------------------------------------------
     def axis(self, number: object, *, where: str = "") -> Axis:
@@ -193,14 +199,18 @@ class TrioController:
         converted = spec.convert(value, key, "")
         if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and not ax.has_pwm:
             raise ConfigurationError.out_of_range(f"axis of ATYPE={ATYPE_STEPPER_PWM}", ax.number, _pwm_axes())
+        was_stepper = ax.stepper
         old = ax.params[key]
         ax.params[key] = converted
-        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and old != ATYPE_STEPPER_PWM:
+        if key == "ATYPE" and ax.stepper and not was_stepper:
             ax.became_stepper()
+        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and old != ATYPE_STEPPER_PWM:
             assert ax.gate is not None
             raw = (int(self.sim.rng.integers(0, PWM_ENCODER_MODULUS)) if self.encoder_at_atype is None
                    else self.encoder_at_atype)
             ax.gate.preset_encoder(raw)
+        elif key == "INVERT_STEP":
+            ax.set_invert_step(int(converted))
         elif key == "PWM_CYCLE":
             assert ax.pwm is not None
             ax.pwm.set_cycle(int(converted))
@@ -224,6 +234,7 @@ class TrioController:
         values: dict[str, Any] = {
             "DPOS": lambda: ax.dpos, "MPOS": lambda: ax.mpos_at(now), "VP_SPEED": lambda: ax.vp_speed,
             "OFFPOS": lambda: ax.offpos, "IDLE": lambda: -1 if ax.idle else 0,
+            "LOADED": lambda: -1 if self.buffers.loaded((ax.number,)) else 0,
             "FE": lambda: ax.dpos - ax.mpos_at(now),
             "PWM_ENCODER": lambda: self._gate(ax.number, "PWM_ENCODER").encoder_value(),
         }
@@ -246,6 +257,18 @@ class TrioController:
     def _table_index(self, index: object) -> int:
         return validate.integer(index, "TABLE index", low=0, high=len(self.table_memory) - 1, whole=True)
 
+    # -- VR -------------------------------------------------------------------------------------
+    def vr(self, index: object) -> int | Fraction:
+        """``VR(n)``: read a global variable (0 until written)."""
+        return self.vr_memory[self._vr_index(index)]
+
+    def set_vr(self, index: object, value: int | Fraction) -> None:
+        """``VR(n) = value``: write a global variable (shared by every process)."""
+        self.vr_memory[self._vr_index(index)] = value
+
+    def _vr_index(self, index: object) -> int:
+        return validate.integer(index, "VR index", low=0, high=len(self.vr_memory) - 1, whole=True)
+
     # -- motion commands ----------------------------------------------------------------------
     def defpos(self, axes: Sequence[int], positions: Sequence[object]) -> None:
         """``DEFPOS(p1, ...)`` for ``axes``: applied by the next servo cycle (see OFFPOS)."""
@@ -253,41 +276,61 @@ class TrioController:
         for a, p in zip(axes, positions, strict=False):
             self.axis(a).defpos(validate.exact(p, "DEFPOS position"))
 
-    def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool) -> Event:
+    def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool, origin: str = "") -> Event:
         """``MOVE`` / ``MOVEABS`` on ``axes`` (the first is the base axis): an event once it is buffered."""
         command = "MOVEABS" if absolute else "MOVE"
         _check_count(command, values, axes)
-        group = tuple(int(a) for a in axes[:len(values)])
-        base = self.axis(group[0])
-        for a in group:
-            self.axis(a)
+        group = self._group(axes[:len(values)], command)
+        move = Move(group, command, tuple(validate.exact(v, f"{command} value") for v in values), origin)
+        return self.buffers.add(move)
+
+    def movecirc(self, axes: Sequence[int], values: Sequence[object], *, origin: str = "") -> Event:
+        """``MOVECIRC(end1, end2, centre1, centre2, direction)`` on the first two of ``axes``.
+
+        End and centre are relative to the start [units]; direction 0 is anticlockwise, 1 clockwise.
+        """
+        if len(values) != 5:
+            raise ConfigurationError.out_of_range("number of MOVECIRC values", len(values),
+                                                  "5 (end1, end2, centre1, centre2, direction)")
+        if len(axes) < 2:
+            raise ConfigurationError.out_of_range("number of BASE axes for MOVECIRC", len(axes),
+                                                  ">= 2 (the arc is in the plane of the first two)")
+        group = self._group(axes[:2], "MOVECIRC")
+        e1, e2, c1, c2 = (validate.exact(v, "MOVECIRC value") for v in values[:4])
+        direction = int(validate.flag(values[4], "MOVECIRC direction", true=(1,), allowed="0 (anticlockwise) or "
+                                      "1 (clockwise)"))
+        path = ArcPath.plan((e1, e2), (c1, c2), clockwise=direction == 1, tolerance=1 / self.axes[group[0]].units)
+        return self.buffers.add(Move(group, "MOVECIRC", (e1, e2, c1, c2, Fraction(direction)), origin, path=path))
+
+    def forward(self, axis: int, *, reverse: bool = False, origin: str = "") -> Event:
+        """``FORWARD`` / ``REVERSE``: a continuous move of ``axis`` at its SPEED until ``CANCEL``."""
+        command = "REVERSE" if reverse else "FORWARD"
+        return self.buffers.add(Move(self._group((axis,), command), command, (), origin))
+
+    def _group(self, axes: Sequence[int], command: str) -> tuple[int, ...]:
+        group = tuple(self.axis(a).number for a in axes)
+        base = self.axes[group[0]]
         validate.positive(base.params["SPEED"], f"SPEED of axis {base.number} for {command}")
-        move = Move(group, tuple(validate.exact(v, f"{command} value") for v in values), absolute)
-        done = self.sim.env.event()
-        if not self._move_waiters and self._can_queue(move):
-            self._queue(move)
-            done.succeed()
-        else:
-            self._move_waiters.append((move, done))
-        return done
+        for a in group:
+            if a in self.wired and self.axes[a].params["ATYPE"] == ATYPE_VIRTUAL:
+                raise ConfigurationError(
+                    f"{command} on axis {a}: its step/direction output drives a plant, but ATYPE = 0 (virtual) "
+                    "gives no step pulses (allowed: ATYPE = 1 or 35 before moving the axis)")
+        return group
 
-    def _can_queue(self, move: Move) -> bool:
-        return all(self.axes[a].queued is None for a in move.axes)
-
-    def _queue(self, move: Move) -> None:
-        for a in move.axes:
-            self.axes[a].queued = move
-        self._queued.append(move)
+    def cancel(self, axes: Sequence[int]) -> None:
+        """``CANCEL``: the running moves of ``axes`` decelerate at DECEL from the next servo tick."""
+        self.buffers.cancel(tuple(self.axis(a).number for a in axes))
 
     def wait_idle(self, axes: Sequence[int]) -> Event:
         """An event that succeeds at the servo tick where every axis in ``axes`` is idle."""
         group = tuple(self.axis(a).number for a in axes)
-        done = self.sim.env.event()
-        if all(self.axes[a].idle for a in group):
-            done.succeed()
-        else:
-            self._idle_waiters.append((group, done))
-        return done
+        return self.buffers.wait(lambda: self.buffers.idle(group))
+
+    def wait_loaded(self, axes: Sequence[int]) -> Event:
+        """An event that succeeds at the servo tick where no move waits behind the running one on ``axes``."""
+        group = tuple(self.axis(a).number for a in axes)
+        return self.buffers.wait(lambda: self.buffers.loaded(group))
 
     # -- PWM_CONTROL --------------------------------------------------------------------------
     def pwm_control(self, axis: int, mode: object, *args: object) -> Event | None:
@@ -346,6 +389,11 @@ class TrioController:
         validate.integer(last, "PWM_CONTROL(3) table end", low=first, allowed=f">= table start {first}")
         validate.integer(last - first + 1, "PWM_CONTROL(3) positions in one load", low=1, high=FIFO_DEPTH,
                          allowed=f"1..{FIFO_DEPTH} (the FIFO depth)")
+        half = PWM_ENCODER_MODULUS // 2
+        for k in range(first, last + 1):  # a compare position must fit the 29-bit register, signed
+            validate.in_range(self.table_memory[k] * ax.units, f"PWM_CONTROL(3) position TABLE({k}) x UNITS",
+                              low=-half, high=half, high_open=True,
+                              allowed=f"-{half} <= counts < {half} (a signed 29-bit compare)")
         return toggled_entries(self.table_memory[first:last + 1], ax.units, greater=greater, first_state=first_state)
 
     def _gate(self, axis: int, what: str) -> GateFifo:
@@ -377,11 +425,25 @@ class TrioController:
                        mark_clocks=pwm.mark_out.signal, phase_clocks=pwm.phase_out, clock_hz=Fraction(PWM_CLOCK_HZ))
 
     def step_dir(self, axis: int) -> StepDirPort:
-        """The step/direction output of stepper axis ``axis`` (ATYPE=35; axes with the feature)."""
+        """The step/direction output of ``axis`` (pulses while ATYPE is 1 or 35).
+
+        The port's ``active_delay`` is the step pulse width: a drive counts each pulse at its active
+        (trailing) edge, as the controller does. Taking the port marks the axis as driving a plant:
+        a move on it while ATYPE = 0 (no pulses) is then an error.
+        """
         ax = self.axis(axis)
-        if ax.step is None or ax.dir is None:
-            raise ConfigurationError.out_of_range("step/direction axis", ax.number, _pwm_axes())
-        return StepDirPort(ax.step, ax.dir)
+        self.wired.add(ax.number)
+        step, direction = ax.ensure_outputs()
+        return StepDirPort(step, direction, active_delay=self.pulse_width_ticks)
+
+    # -- digital I/O ------------------------------------------------------------------------------
+    def input(self, channel: object) -> Signal:
+        """The signal of digital input ``channel`` (``trio.in.N``): drive it to feed ``IN(n)``."""
+        return self.io.input(channel)
+
+    def output(self, channel: object) -> Signal:
+        """The signal of digital output ``channel`` (``trio.op.N``), set by ``OP(n, ON/OFF)``."""
+        return self.io.output(channel)
 
     def outputs(self) -> list[Signal | PulseTrain]:
         """Every signal the controller drives (:class:`cosim.controllers.Controller`)."""
@@ -390,11 +452,16 @@ class TrioController:
             out += [s for s in (ax.step, ax.dir) if s is not None]
             if ax.pwm is not None and ax.gate is not None:
                 out += [ax.gate.output.signal, ax.pwm.cycle_out.signal, ax.pwm.mark_out.signal, ax.pwm.phase_out]
-        return out
+        return out + self.io.outputs()
 
     def inputs(self) -> list[Signal]:
-        """Every signal the controller reads (none yet: digital inputs arrive with IN(n))."""
-        return []
+        """Every signal the controller reads: the digital inputs ``trio.in.0`` .. ``trio.in.31``.
+
+        Input signals are created on first use (a program creates those its ``IN(n)`` names when it
+        starts; :meth:`input` creates one), so a trace holds only the inputs in use; asking for all
+        of them here creates them all.
+        """
+        return [self.io.input(n) for n in range(self.io.channels)]
 
 
 def _pwm_axes() -> str:

@@ -22,7 +22,8 @@ Choices where the note is silent (see ``docs/trio.md``):
 * an entry that fires because it was loaded (or gating switched on, or PWM_ENCODER cleared)
   rather than because the axis counted onto it was passed before it could be compared: it is
   *late*. It still toggles the gate at that instant, and its position [units] is recorded in
-  ``trio.axisN.gate_late`` so a scenario can report the positions a starved FIFO missed.
+  ``trio.axisN.gate_late`` so a scenario can report the positions a starved FIFO missed;
+  ``trio.axisN.late_positions`` counts them (0 all run long: the FIFO never starved).
 """
 
 from __future__ import annotations
@@ -133,6 +134,8 @@ class GateFifo:
                                     description="positions of PWM_CONTROL(3) loads waiting for FIFO space")
         sim.trace.declare(f"{prefix}.gate_late", "real", unit="units",
                           description="position of a gate entry passed before it was loaded (recorded when it fires)")
+        self.late_count = Signal(sim, f"{prefix}.late_positions", kind="int", unit="positions",
+                                 description="gate entries passed before they were loaded so far (FIFO starvation)")
 
     # -- PWM_ENCODER --------------------------------------------------------------------------
     def encoder_value(self, t: int | None = None) -> int:
@@ -247,6 +250,7 @@ class GateFifo:
         if late:
             self.late.append((self.sim.now, entry.position))
             self.sim.trace.record(f"{self.prefix}.gate_late", self.sim.now, float(entry.position))
+            self.late_count.set(len(self.late))
         if self.on_fire is not None:
             self.on_fire(entry, self.sim.now)
         self._refresh()

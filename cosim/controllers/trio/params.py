@@ -35,13 +35,27 @@ FIFO_DEPTH = 256
 PWM_AXES = (2, 3)
 SERVO_PERIODS_US = (250, 500, 1000, 2000)
 DEFAULT_SERVO_PERIOD_US = 1000
-#: ATYPE values modelled: 0 virtual axis (no output), 35 stepper output with PWM (axes 2 and 3).
+#: ATYPE values modelled: 0 virtual axis (no output), 1 stepper (step/direction output, any axis),
+#: 35 stepper output with PWM (axes 2 and 3, TN20-81).
 ATYPE_VIRTUAL = 0
+ATYPE_STEPPER = 1
 ATYPE_STEPPER_PWM = 35
 #: Divisor of the speed-link formula of PWM_CONTROL(2) (``VP_SPEED * multiplier / 100000 + offset``).
 SPEED_LINK_DIVISOR = 100_000
 #: Default size of TABLE memory [entries] (not stated in the note: a model parameter).
 DEFAULT_TABLE_SIZE = 16_000
+#: Default number of VR globals, VR(0)..VR(1023) (not re-read in a manual: a model parameter).
+DEFAULT_VR_SIZE = 1024
+#: User processes of a Euro 205, numbered 1..5 (TRM 7-12; process 0 is the command line).
+PROCESSES = 5
+#: Digital I/O channels: IN(0)..IN(31); outputs OP(8)..OP(31) (0..7 are inputs only) [model choice].
+DEFAULT_IO_CHANNELS = 32
+FIRST_OUTPUT = 8
+#: Step pulse width [ns] from the leading to the active edge (not in the facts: a model parameter).
+DEFAULT_STEP_PULSE_WIDTH_NS = 100
+#: Direction set-up before the leading edge of a step pulse [ns] (TRM 8-165 note: a wrong INVERT_STEP
+#: "may lose position by one step when changing direction", so the direction changes with the leading edge).
+DEFAULT_DIR_SETUP_NS = 0
 
 #: BASIC constants.
 ON, OFF, TRUE, FALSE = 1, 0, -1, 0
@@ -108,10 +122,13 @@ def _flag(value: object, name: str, where: str) -> Number:
     return on_off(value, name, where=where)
 
 
+ATYPES = f"{ATYPE_VIRTUAL} (virtual), {ATYPE_STEPPER} (stepper), {ATYPE_STEPPER_PWM} (stepper output with PWM)"
+
+
 def _atype(value: object, name: str, where: str) -> Number:
-    allowed = f"{ATYPE_VIRTUAL} (virtual), {ATYPE_STEPPER_PWM} (stepper output with PWM)"
-    number = validate.integer(value, name, where=where, allowed=allowed, whole=True)
-    return validate.choice(number, name, (ATYPE_VIRTUAL, ATYPE_STEPPER_PWM), where=where, allowed=allowed)
+    number = validate.integer(value, name, where=where, allowed=ATYPES, whole=True)
+    return validate.choice(number, name, (ATYPE_VIRTUAL, ATYPE_STEPPER, ATYPE_STEPPER_PWM), where=where,
+                           allowed=ATYPES)
 
 
 #: Writable axis parameters.
@@ -120,8 +137,10 @@ AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     ParamSpec("SPEED", 1000, ">= 0", _not_negative, "units/s", "programmed path speed"),
     ParamSpec("ACCEL", 1000, "> 0", _positive, "units/s^2", "acceleration"),
     ParamSpec("DECEL", 1000, "> 0", _positive, "units/s^2", "deceleration"),
-    ParamSpec("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER_PWM}", _atype, "",
-              "axis type: 0 virtual, 35 stepper output with PWM"),
+    ParamSpec("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER}, {ATYPE_STEPPER_PWM}", _atype, "",
+              "axis type: 0 virtual, 1 stepper, 35 stepper output with PWM"),
+    ParamSpec("INVERT_STEP", 0, "ON/OFF", _flag, "", "invert the step output: its active edge becomes rising "
+              "(TRM 8-165)"),
     ParamSpec("SERVO", 0, "ON/OFF", _flag, "", "servo on: step pulses feed MPOS and PWM_ENCODER"),
     ParamSpec("FE_LIMIT", 2000, ">= 0", _not_negative, "units", "largest |DPOS - MPOS| before a motion error"),
     ParamSpec("PWM_CYCLE", 0, _REGISTER, _register, "clocks", "PWM mark+space period [20 MHz clocks]",
@@ -137,6 +156,7 @@ READ_ONLY_AXIS_PARAMS: dict[str, str] = {
     "OFFPOS": "position offset of a DEFPOS not yet applied by the servo cycle [units]",
     "PWM_ENCODER": "29-bit count of the step pulses (PWM axes)",
     "IDLE": "TRUE (-1) when the axis has no move running or buffered",
+    "LOADED": "TRUE (-1) when no move waits in the axis' next-move buffer",
     "FE": "following error DPOS - MPOS [units]",
 }
 
@@ -158,30 +178,11 @@ def check_servo_period_us(value: object) -> int:
     number = validate.integer(value, "SERVO_PERIOD", allowed=allowed, whole=True)
     return validate.choice(number, "SERVO_PERIOD", SERVO_PERIODS_US, allowed=allowed)
 
-#: Commands and functions of the modelled BASIC subset (see :mod:`cosim.controllers.trio.basic`).
-COMMANDS: dict[str, str] = {
-    "BASE": "BASE(a, b, ...): the axes later commands of this program act on",
-    "TABLE": "TABLE(start, v1, ...) writes TABLE memory; TABLE(n) reads one location",
-    "PWM_CONTROL": "PWM_CONTROL(mode, ...): PWM output, speed link and gating (TN20-81)",
-    "DEFPOS": "DEFPOS(p1, ...): define the position of the BASE axes",
-    "MOVE": "MOVE(d1, ...): relative move, interpolated over the BASE axes",
-    "MOVEABS": "MOVEABS(p1, ...): absolute move, interpolated over the BASE axes",
-    "WA": "WA(ms): wait",
-    "VR": "VR(n): global variable",
-    "ABS": "ABS(x)",
-    "INT": "INT(x): integer part",
-}
-CONSTANTS: dict[str, int] = {"ON": ON, "OFF": OFF, "TRUE": TRUE, "FALSE": FALSE}
-KEYWORDS = frozenset(AXIS_PARAMS) | frozenset(READ_ONLY_AXIS_PARAMS) | frozenset(SYSTEM_PARAMS) | frozenset(
-    COMMANDS) | frozenset(CONSTANTS) | frozenset({"AXIS", "WAIT", "IDLE", "UNTIL", "REPEAT", "WHILE", "WEND",
-                                                  "FOR", "TO", "STEP", "NEXT", "IF", "THEN", "ELSE", "ENDIF",
-                                                  "AND", "OR", "NOT"})
-
-
 def unknown_name(name: str) -> str:
-    """The message for a name that is no keyword of the modelled subset, with close matches."""
+    """The message for a parameter name the model does not know, with close matches."""
     import difflib
 
-    close = difflib.get_close_matches(name.upper(), sorted(KEYWORDS), n=3)
+    known = sorted(AXIS_PARAMS) + sorted(READ_ONLY_AXIS_PARAMS) + sorted(SYSTEM_PARAMS)
+    close = difflib.get_close_matches(name.upper(), known, n=3)
     hint = f"; did you mean {', '.join(close)}?" if close else ""
-    return f"unknown keyword {name}{hint}"
+    return f"unknown parameter {name}{hint}"

@@ -47,6 +47,10 @@ class TrioProcess:
         self.sim = controller.sim
         self.base_axes: tuple[int, ...] = ()
         self.base(*base)
+        #: Where the next command comes from (``job.bas line 12``), for errors raised later by its move.
+        self.origin = ""
+        self._ticks_value = 0
+        self._ticks_set_at = controller.sim.now
 
     def _done(self) -> Event:
         event = self.sim.env.event()
@@ -87,15 +91,68 @@ class TrioProcess:
 
     def move(self, *distances: object, axis: object | None = None) -> Event:
         """``MOVE(d1, ...)``: relative move of the BASE axes, interpolated."""
-        return self.controller.move(self._axes(axis), distances, absolute=False)
+        return self.controller.move(self._axes(axis), distances, absolute=False, origin=self.origin)
 
     def moveabs(self, *positions: object, axis: object | None = None) -> Event:
         """``MOVEABS(p1, ...)``: absolute move of the BASE axes, interpolated."""
-        return self.controller.move(self._axes(axis), positions, absolute=True)
+        return self.controller.move(self._axes(axis), positions, absolute=True, origin=self.origin)
+
+    def movecirc(self, end1: object, end2: object, centre1: object, centre2: object, direction: object, *,
+                 axis: object | None = None) -> Event:
+        """``MOVECIRC(end1, end2, centre1, centre2, direction)``: an arc of the first two BASE axes.
+
+        End and centre relative to the start [units]; direction 0 anticlockwise, 1 clockwise.
+        ``VP_SPEED`` of the base axis is the speed along the arc.
+        """
+        return self.controller.movecirc(self._axes(axis), (end1, end2, centre1, centre2, direction),
+                                        origin=self.origin)
+
+    def forward(self, *, axis: object | None = None) -> Event:
+        """``FORWARD``: move the base axis (or ``axis``) forward at SPEED until ``CANCEL``."""
+        return self.controller.forward(self._axes(axis)[0], origin=self.origin)
+
+    def reverse(self, *, axis: object | None = None) -> Event:
+        """``REVERSE``: move the base axis (or ``axis``) in reverse at SPEED until ``CANCEL``."""
+        return self.controller.forward(self._axes(axis)[0], reverse=True, origin=self.origin)
+
+    def cancel(self, *, axis: object | None = None) -> None:
+        """``CANCEL``: the running move of the base axis (or ``axis``) decelerates to rest at DECEL."""
+        self.controller.cancel(self._axes(axis)[:1])
 
     def wait_idle(self, *, axis: object | None = None) -> Event:
         """``WAIT IDLE``: until every BASE axis has finished its moves."""
         return self.controller.wait_idle(self._axes(axis))
+
+    def wait_loaded(self, *, axis: object | None = None) -> Event:
+        """``WAIT LOADED``: until no move waits behind the running one on the BASE axes."""
+        return self.controller.wait_loaded(self._axes(axis))
+
+    def op(self, channel: object, state: object) -> None:
+        """``OP(n, ON/OFF)``: set a digital output."""
+        self.controller.io.write_output(channel, state)
+
+    def read_op(self, channel: object) -> int:
+        """``READ_OP(n)``: the state last written to output ``n`` (1 ON, 0 OFF)."""
+        return self.controller.io.read_output(channel)
+
+    def input(self, channel: object) -> int:
+        """``IN(n)``: the state of digital input ``n`` (1 ON, 0 OFF)."""
+        return self.controller.io.read_input(channel)
+
+    @property
+    def ticks(self) -> int:
+        """``TICKS``: this process' counter, decremented at every servo tick since it was last written.
+
+        A 32-bit signed register (it wraps); 0 when the process starts.
+        """
+        period = self.controller.period_ticks
+        elapsed = self.sim.now // period - self._ticks_set_at // period
+        return (self._ticks_value - elapsed + (1 << 31)) % (1 << 32) - (1 << 31)
+
+    @ticks.setter
+    def ticks(self, value: object) -> None:
+        self._ticks_value = validate.integer(value, "TICKS", low=-(1 << 31), high=(1 << 31) - 1, whole=True)
+        self._ticks_set_at = self.sim.now
 
     def pwm_control(self, mode: object, *args: object, axis: object | None = None) -> Event:
         """``PWM_CONTROL(mode, ...)`` on the base axis (or ``axis``); mode 3 may wait for FIFO space."""
@@ -103,9 +160,10 @@ class TrioProcess:
         return loaded if loaded is not None else self._done()
 
     def wa(self, ms: object) -> Event:
-        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks)."""
+        """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks); the program goes on at HOST priority,
+        after a servo tick at that instant, like every program wake-up."""
         value = validate.positive(ms, "WA time", unit="ms", zero=True)
-        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"))
+        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"), Priority.HOST)
 
     def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
         """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""

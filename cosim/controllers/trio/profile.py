@@ -122,3 +122,78 @@ class Trapezoid:
         if t < self.t_accel + self.t_const:
             return self.peak
         return self.decel * (self.t_end - t)
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """A continuous move (``FORWARD`` / ``REVERSE``): accelerate at ``accel`` to ``speed`` and hold it.
+
+    Examples
+    --------
+    >>> r = Ramp(Fraction(100), Fraction(1000))
+    >>> r.position(Fraction(1, 10)), r.position(Fraction(1, 5)), r.t_end is None
+    (Fraction(5, 1), Fraction(15, 1), True)
+    """
+
+    peak: Fraction
+    accel: Fraction
+
+    @property
+    def t_end(self) -> Fraction | None:
+        """A continuous move has no end of its own (only CANCEL stops it)."""
+        return None
+
+    def position(self, t: Fraction) -> Fraction:
+        """Distance travelled at ``t`` [s] after the start [units]."""
+        if t <= 0:
+            return Fraction(0)
+        t_accel = self.peak / self.accel
+        if t < t_accel:
+            return self.accel * t * t / 2
+        return self.peak * t_accel / 2 + self.peak * (t - t_accel)
+
+    def speed(self, t: Fraction) -> Fraction:
+        """Speed at ``t`` [s] after the start [units/s]."""
+        return Fraction(0) if t <= 0 else min(self.accel * t, self.peak)
+
+
+@dataclass(frozen=True)
+class Stop:
+    """The rest of a cancelled move: from ``start`` [units] at ``speed`` [units/s], decelerate to rest.
+
+    Times are those of the move (``t0`` [s] after its start, where the cancel takes effect).
+
+    Examples
+    --------
+    >>> s = Stop(t0=Fraction(1), start=Fraction(50), start_speed=Fraction(100), decel=Fraction(1000))
+    >>> s.t_end, s.position(Fraction(11, 10)), s.length
+    (Fraction(11, 10), Fraction(55, 1), Fraction(55, 1))
+    """
+
+    t0: Fraction
+    start: Fraction
+    start_speed: Fraction
+    decel: Fraction
+
+    @property
+    def t_end(self) -> Fraction:
+        """When the move is at rest [s after the move's start]."""
+        return self.t0 + self.start_speed / self.decel
+
+    @property
+    def length(self) -> Fraction:
+        """Distance along the path where it stops [units]."""
+        return self.start + self.start_speed * self.start_speed / (2 * self.decel)
+
+    def position(self, t: Fraction) -> Fraction:
+        """Distance along the path at ``t`` [s after the move's start] [units]."""
+        if t >= self.t_end:
+            return self.length
+        tau = max(t - self.t0, Fraction(0))
+        return self.start + self.start_speed * tau - self.decel * tau * tau / 2
+
+    def speed(self, t: Fraction) -> Fraction:
+        """Speed at ``t`` [s after the move's start] [units/s]."""
+        if t >= self.t_end:
+            return Fraction(0)
+        return self.start_speed - self.decel * max(t - self.t0, Fraction(0))

@@ -1,0 +1,127 @@
+"""The move buffers: one running and one buffered move per axis, and the programs that wait on them.
+
+A move command (``MOVE``, ``MOVEABS``, ``MOVECIRC``, ``FORWARD``, ``REVERSE``) goes into the
+buffer of every axis it moves if they all have room, else the program waits (in issue order)
+until the servo cycle frees them. At each servo tick moves whose last cycle was output leave,
+buffered moves whose axes are all free are loaded, a requested ``CANCEL`` takes effect, and every
+running move runs one cycle. ``WAIT IDLE`` returns at the tick where the axes have neither a
+running nor a buffered move, ``WAIT LOADED`` where they have no buffered move.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Sequence
+from fractions import Fraction
+
+from simpy.events import Event
+
+from cosim.controllers.trio.motion import Axis, Move
+from cosim.errors import ConfigurationError
+from cosim.kernel import Simulation
+
+
+class MoveBuffers:
+    """The move buffers of the axes of one controller.
+
+    Parameters
+    ----------
+    sim : Simulation
+    axes : dict of int to Axis
+    """
+
+    def __init__(self, sim: Simulation, axes: dict[int, Axis]) -> None:
+        self.sim = sim
+        self.axes = axes
+        self._queued: list[Move] = []
+        self._move_waiters: deque[tuple[Move, Event]] = deque()
+        self._waiters: list[tuple[Callable[[], bool], Event]] = []
+
+    # -- commands -----------------------------------------------------------------------------
+    def add(self, move: Move) -> Event:
+        """Buffer ``move``: an event that succeeds once it is in the buffers (at once if there is room)."""
+        done = self.sim.env.event()
+        if not self._move_waiters and self._can_queue(move):
+            self._queue(move)
+            done.succeed()
+        else:
+            self._move_waiters.append((move, done))
+        return done
+
+    def cancel(self, axes: Sequence[int]) -> None:
+        """``CANCEL``: the running move of each axis decelerates from the next servo tick on."""
+        for a in axes:
+            move = self.axes[a].current
+            if move is not None and not move.done:
+                move.cancel_requested = True
+
+    def wait(self, condition: Callable[[], bool]) -> Event:
+        """An event that succeeds now, or at the first servo tick where ``condition()`` holds."""
+        done = self.sim.env.event()
+        if condition():
+            done.succeed()
+        else:
+            self._waiters.append((condition, done))
+        return done
+
+    def idle(self, axes: Sequence[int]) -> bool:
+        """No move running or buffered on any of ``axes``."""
+        return all(self.axes[a].idle for a in axes)
+
+    def loaded(self, axes: Sequence[int]) -> bool:
+        """No move buffered (nor waiting to be) behind the running one on any of ``axes``."""
+        return all(self.axes[a].queued is None for a in axes) and not any(
+            set(move.axes) & set(axes) for move, _ in self._move_waiters)
+
+    def _can_queue(self, move: Move) -> bool:
+        return all(self.axes[a].queued is None for a in move.axes)
+
+    def _queue(self, move: Move) -> None:
+        for a in move.axes:
+            self.axes[a].queued = move
+        self._queued.append(move)
+
+    # -- the servo cycle ----------------------------------------------------------------------
+    def load(self, now: int) -> None:
+        """End moves whose last cycle was output; load buffered moves whose axes are free."""
+        for axis in self.axes.values():
+            if axis.current is not None and axis.current.done:
+                axis.current = None
+        for move in list(self._queued):
+            if all(self.axes[a].current is None for a in move.axes):
+                try:
+                    move.load(self.axes, now)
+                except ConfigurationError as exc:  # a plan that fails stops the job, naming where the move came from
+                    raise ConfigurationError(f"{move.origin}: {exc}" if move.origin else str(exc)) from exc
+                for a in move.axes:
+                    self.axes[a].current, self.axes[a].queued = move, None
+                self._queued.remove(move)
+
+    def run_cycle(self, now: int, period_ticks: int, period_s: Fraction) -> None:
+        """One cycle of every running move: demands, VP_SPEED and step pulses."""
+        running: dict[int, Move] = {}
+        for axis in self.axes.values():
+            axis.vp_speed = Fraction(0)
+            if axis.current is not None:
+                running[id(axis.current)] = axis.current
+        for move in running.values():
+            if move.cancel_requested:
+                move.stop(period_s, Fraction(self.axes[move.axes[0]].params["DECEL"]))
+            demands, speed = move.advance(period_s)
+            for a, demand in zip(move.axes, demands, strict=True):
+                self.axes[a].vp_speed = speed
+                self.axes[a].output_cycle(now, period_ticks, demand, move.origin)
+
+    def release(self) -> None:
+        """After the servo cycle: buffer waiting moves that now fit, release satisfied waits."""
+        while self._move_waiters and self._can_queue(self._move_waiters[0][0]):
+            move, done = self._move_waiters.popleft()
+            self._queue(move)
+            done.succeed()
+        still = []
+        for condition, done in self._waiters:
+            if condition():
+                done.succeed()
+            else:
+                still.append((condition, done))
+        self._waiters = still

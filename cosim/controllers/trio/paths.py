@@ -1,0 +1,127 @@
+"""The geometry of a move: where the axes are after a distance ``s`` along the path.
+
+A move's profile (:mod:`~cosim.controllers.trio.profile`) gives the distance ``s`` travelled
+along the path at each servo cycle; the path turns it into one displacement per axis [user units
+of each axis], from the position the move started at:
+
+* :class:`LinearPath` (``MOVE``, ``MOVEABS``): the straight line, ``d_i * s / L`` with
+  ``L = sqrt(sum d_i**2)`` (exact, or rounded down to ``2**-64`` when irrational);
+* :class:`ArcPath` (``MOVECIRC``): the circle through the start around the centre, ``s / r``
+  radians from the start angle, anticlockwise (direction 0) or clockwise (1) in the plane of the
+  first two axes; angles, sines and cosines from :mod:`~cosim.controllers.trio.trig`;
+* :class:`RayPath` (``FORWARD``, ``REVERSE``): one axis, without an end.
+
+At the full length a path returns its programmed end exactly, so a move always ends on target.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+
+from cosim.controllers.trio.profile import sqrt_down
+from cosim.controllers.trio.trig import atan2, cos_sin, pi_down
+from cosim.errors import ConfigurationError
+
+
+@dataclass(frozen=True)
+class LinearPath:
+    """A straight line by ``deltas`` [units of each axis]."""
+
+    deltas: tuple[Fraction, ...]
+
+    @property
+    def length(self) -> Fraction:
+        """Path length [units] (the base axis' units for the profile)."""
+        if len(self.deltas) == 1:
+            return abs(self.deltas[0])
+        return sqrt_down(sum((d * d for d in self.deltas), Fraction(0)))
+
+    def offset(self, s: Fraction) -> tuple[Fraction, ...]:
+        """Displacement of each axis after ``s`` along the path [units]."""
+        length = self.length
+        if s >= length or length == 0:
+            return self.deltas
+        share = s / length
+        return tuple(d * share for d in self.deltas)
+
+
+@dataclass(frozen=True)
+class RayPath:
+    """One axis without an end: ``+s`` (FORWARD) or ``-s`` (REVERSE)."""
+
+    sign: int
+
+    @property
+    def length(self) -> None:
+        """No length: the move runs until it is cancelled."""
+        return None
+
+    def offset(self, s: Fraction) -> tuple[Fraction, ...]:
+        """Displacement after ``s`` [units]."""
+        return (self.sign * s,)
+
+
+@dataclass(frozen=True)
+class ArcPath:
+    """An arc from the start to ``end`` around ``centre`` (both relative to the start) [units].
+
+    Parameters
+    ----------
+    end, centre : tuple of Fraction
+        End point and centre relative to the start, in the plane of the first two axes.
+    clockwise : bool
+        MOVECIRC direction 1 (clockwise, negative about the third axis); 0 is anticlockwise.
+    radius, start_angle, sweep : Fraction
+        Radius [units], angle of the start seen from the centre [rad] and the signed angle swept
+        (a full circle when the end is the start) [rad].
+    """
+
+    end: tuple[Fraction, Fraction]
+    centre: tuple[Fraction, Fraction]
+    clockwise: bool
+    radius: Fraction
+    start_angle: Fraction
+    sweep: Fraction
+
+    @classmethod
+    def plan(cls, end: tuple[Fraction, Fraction], centre: tuple[Fraction, Fraction], *, clockwise: bool,
+             tolerance: Fraction) -> ArcPath:
+        """Plan the arc; the end must lie on the circle within ``tolerance`` [units].
+
+        Raises
+        ------
+        ConfigurationError
+            A centre at the start (no circle), or an end whose distance from the centre differs
+            from the start's by more than ``tolerance``.
+        """
+        (e1, e2), (c1, c2) = end, centre
+        r2_start = c1 * c1 + c2 * c2
+        if r2_start == 0:
+            raise ConfigurationError("MOVECIRC centre is the start point: there is no circle (give the centre "
+                                     "relative to the start)")
+        r2_end = (e1 - c1) ** 2 + (e2 - c2) ** 2
+        radius, r_end = sqrt_down(r2_start), sqrt_down(r2_end)
+        if abs(r_end - radius) > tolerance:
+            raise ConfigurationError(
+                f"MOVECIRC end point is not on the circle: radius {float(radius):g} at the start, "
+                f"{float(r_end):g} at the end (allowed: the same within {float(tolerance):g} units, one step)")
+        a0, a1 = atan2(-c2, -c1), atan2(e2 - c2, e1 - c1)
+        two_pi = 2 * pi_down()
+        full = e1 == 0 and e2 == 0
+        turn = two_pi if full else ((a0 - a1) if clockwise else (a1 - a0)) % two_pi
+        sweep = -turn if clockwise else turn
+        return cls((e1, e2), (c1, c2), clockwise, radius, a0, sweep)
+
+    @property
+    def length(self) -> Fraction:
+        """Arc length [units]: radius * |sweep|."""
+        return self.radius * abs(self.sweep)
+
+    def offset(self, s: Fraction) -> tuple[Fraction, ...]:
+        """Displacement of the two axes after ``s`` along the arc [units]; the exact end at the full length."""
+        if s >= self.length:
+            return self.end
+        turn = s / self.radius
+        cos, sin = cos_sin(self.start_angle + (-turn if self.clockwise else turn))
+        return (self.centre[0] + self.radius * cos, self.centre[1] + self.radius * sin)
