@@ -34,6 +34,8 @@ from cosim.pokeys_device.logs import RateLimit
 from cosim.pokeys_device.packets import FRAME_BYTES, HEADER_BYTES, PORT, REQUEST_HEADER, PartCollector, checksum
 from cosim.pokeys_device.realtime import RealtimePacer
 
+_PAIR_ATTEMPTS = 20  # port 0: UDP ports tried before TCP takes any free port
+
 
 def check_address(host: str, *, allow_remote: bool) -> str:
     """Return ``host`` if it is a loopback address (or remote serving was asked for), else raise.
@@ -185,17 +187,25 @@ class DeviceServer:
         loop = asyncio.get_running_loop()
         loop.set_exception_handler(self.loop_trouble)
         self._stop = asyncio.Event()
-        transport, _ = await loop.create_datagram_endpoint(lambda: _Udp(self), local_addr=(self.host, self.port))
-        self._udp = transport
-        self.udp_port = transport.get_extra_info("sockname")[1]
-        tcp_port = self.port or self.udp_port
-        try:
-            self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, tcp_port, reuse_address=True)
-        except OSError:
-            if self.port:
+        # Like the real device, one port number for both: with port 0 the system picks the UDP port,
+        # and where that number is taken for TCP, another pair is tried (then any TCP port).
+        for attempt in range(_PAIR_ATTEMPTS):
+            transport, _ = await loop.create_datagram_endpoint(lambda: _Udp(self),
+                                                               local_addr=(self.host, self.port))
+            self.udp_port = transport.get_extra_info("sockname")[1]
+            try:
+                self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, self.port or self.udp_port,
+                                                     reuse_address=True)
+                break
+            except OSError:
+                if self.port:
+                    transport.close()
+                    raise
+                if attempt == _PAIR_ATTEMPTS - 1:
+                    self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, 0, reuse_address=True)
+                    break
                 transport.close()
-                raise
-            self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, 0, reuse_address=True)
+        self._udp = transport
         self.tcp_port = self._tcp.sockets[0].getsockname()[1]
         if self.pacer is not None:
             self._pacing = asyncio.create_task(self.pacer.run(self._stop))
