@@ -31,6 +31,7 @@ from cosim.cli import main
 from cosim.errors import ConfigurationError
 from cosim.export import read_trace
 from cosim.fmu_export.package import export_fmu
+from cosim.fmu_export.spec import default_name
 from cosim.machine import load_machine
 from cosim.runner import run_scenario
 from cosim.trace import Trace
@@ -243,8 +244,8 @@ def test_an_export_is_deterministic_and_the_cli_says_what_it_wrote(tmp_path: Pat
      "export.outputs[0].signal: 'trio.axis3.gatee' is not a signal of this machine; did you mean trio.axis3.gate,"),
     ('outputs = [{ signal = "trio.axis3.step", event = true }]',
      "export.outputs[0].event = True is not allowed (allowed: false for a step output"),
-    ('outputs = ["trio.axis3.gate"]\ninputs = ["trio.in.8"]',
-     "export.inputs[0].signal: 'trio.in.8' is not an input of this controller"),
+    ('outputs = ["trio.axis3.gate"]\ninputs = ["trio.axis3.gate"]',
+     "export.inputs[0].signal: 'trio.axis3.gate' is not an input of this controller"),
     ('outptus = ["trio.axis3.gate"]', "export.outptus is not a key of export; did you mean outputs?"),
     ('outputs = [{ signal = "trio.axis3.gate", name = "a b" }]', "export.outputs[0].name = 'a b' is not allowed"),
     ('outputs = ["trio.axis3.gate", { signal = "trio.axis3.dir", name = "trio.axis3.gate" }]',
@@ -263,6 +264,12 @@ def test_a_bad_export_table_is_refused_with_the_file_the_key_and_what_is_allowed
     assert str(info.value).startswith(str(machine)) and message in str(info.value)
     assert not (tmp_path / "bad.fmu").exists()
     assert main(["export-fmu", str(machine), "-o", str(tmp_path / "bad.fmu")]) == 2
+
+
+def test_a_numbered_input_gets_an_fmi_name_without_a_digit_after_the_dot() -> None:
+    assert default_name("trio.in.8") == "trio.in_8"
+    assert default_name("pokeys.x.limit_pos") == "pokeys.x.limit_pos"
+    assert default_name("trio.axis3.gate") == "trio.axis3.gate"
 
 
 def test_a_machine_without_an_export_table_is_refused(tmp_path: Path) -> None:

@@ -212,8 +212,14 @@ def _output(table: Table, trace: Trace, plants: Sequence[Any]) -> Port:
                 unit=unit, description=description)
 
 
+def default_name(source: str) -> str:
+    """The FMU variable name of a signal without ``name =``: the signal's, with a numbered part joined
+    to the one before it by ``_`` (``trio.in.8`` -> ``trio.in_8``), since FMI names are identifiers."""
+    return re.sub(r"\.(?=[0-9])", "_", source)
+
+
 def _name(table: Table, source: str) -> str:
-    name = table.text("name", source)
+    name = table.text("name", default_name(source))
     if not _VARIABLE.match(name) or name == "time":
         raise table.error("name", name, "an FMU variable name: identifiers joined by dots, not 'time'")
     return name
