@@ -21,8 +21,10 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import difflib
+import re
 import shutil
 import tempfile
+import zipfile
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from functools import partial
@@ -55,7 +57,7 @@ def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
     try:
         model = read_model_description(str(path))
     except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
-        raise FmuError(f"{path}: cannot read modelDescription.xml ({type(exc).__name__}: {exc}); "
+        raise FmuError(f"{path}: cannot read modelDescription.xml ({_reason(path, exc)}); "
                        "`python -m fmpy validate` on the file lists what is wrong with it") from exc
     if cosimulation and model.coSimulation is None:
         kinds = "Model Exchange" if model.modelExchange is not None else "no co-simulation"
@@ -68,6 +70,23 @@ def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
             "look at a Model Exchange FMU alone, fmpy.simulate_fmu runs it with its own solver.")
     _read_unsigned_ranges(path, model)
     return model
+
+
+def _reason(path: Path, exc: Exception) -> str:
+    """What fmpy's exception means: a KeyError of a number is a value reference no variable has
+    (FMI 3.0 ModelStructure and dependencies name variables by value reference)."""
+    if isinstance(exc, KeyError) and isinstance(exc.args[0], int):
+        vr = exc.args[0]
+        try:
+            with zipfile.ZipFile(path) as fmu:
+                text = fmu.read("modelDescription.xml").decode("utf-8", "replace")
+        except (OSError, KeyError, zipfile.BadZipFile):
+            text = ""
+        pattern = re.compile(rf'valueReference="{vr}"|dependencies="[^"]*\b{vr}\b')
+        lines = [str(n) for n, line in enumerate(text.splitlines(), 1) if pattern.search(line)]
+        at = f" at line {', '.join(lines[:5])}" if lines else ""
+        return f"value reference {vr} is named{at} but no variable has it"
+    return f"{type(exc).__name__}: {exc}"
 
 
 def _read_unsigned_ranges(path: Path, model: Any) -> None:

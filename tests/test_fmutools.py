@@ -19,7 +19,7 @@ from fmpy.validation import validate_fmu
 
 from cosim import fmudesc
 from cosim.cli import main
-from cosim.errors import ConfigurationError
+from cosim.errors import ConfigurationError, FmuError
 from cosim.export import read_trace
 from cosim.fmu import Fmu
 from cosim.fmubuild import SOURCE_DIR, ensure_fmu, list_models
@@ -166,3 +166,21 @@ def test_the_test_model_validates_and_rebuilds_from_its_own_sources(version: int
     assert result["time"].tolist() == pytest.approx(reference["time"].tolist(), abs=1e-12)
     assert result["position"].tolist() == pytest.approx(reference["position"].tolist(), abs=1e-12)
     assert result["event_stage"].tolist() == reference["event_stage"].tolist()
+
+
+@pytest.mark.fmu
+def test_an_fmi3_description_naming_a_missing_value_reference_says_which_and_where(tmp_path: Path) -> None:
+    with zipfile.ZipFile(ensure_fmu("Laser", 3)) as good, zipfile.ZipFile(tmp_path / "bad.fmu", "w") as bad:
+        for item in good.infolist():
+            data = good.read(item)
+            if item.filename == "modelDescription.xml":
+                text = data.decode()
+                first_output = text.index("<Output ")
+                vr_at = text.index('valueReference="', first_output)
+                end = text.index('"', vr_at + len('valueReference="'))
+                data = (text[:vr_at] + 'valueReference="4711' + text[end:]).encode()
+                line = text[:first_output].count("\n") + 1
+            bad.writestr(item, data)
+    with pytest.raises(FmuError) as info:
+        Fmu(tmp_path / "bad.fmu")
+    assert f"value reference 4711 is named at line {line} but no variable has it" in str(info.value)
