@@ -187,28 +187,26 @@ class DeviceServer:
         loop = asyncio.get_running_loop()
         loop.set_exception_handler(self.loop_trouble)
         self._stop = asyncio.Event()
-        # Like the real device, one port number for both: with port 0 the system picks the UDP port,
-        # and where that number is taken for TCP, another pair is tried (then any TCP port).
-        for attempt in range(_PAIR_ATTEMPTS):
-            transport, _ = await loop.create_datagram_endpoint(lambda: _Udp(self),
-                                                               local_addr=(self.host, self.port))
-            self.udp_port = transport.get_extra_info("sockname")[1]
-            try:
-                self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, self.port or self.udp_port,
-                                                     reuse_address=True)
-                break
-            except OSError:
-                if self.port:
-                    transport.close()
-                    raise
-                if attempt == _PAIR_ATTEMPTS - 1:
-                    self._tcp = await loop.create_server(lambda: _Tcp(self), self.host, 0, reuse_address=True)
-                    break
-                transport.close()
-        self._udp = transport
+        self._udp, self._tcp = await self._bind(loop)
+        self.udp_port = self._udp.get_extra_info("sockname")[1]
         self.tcp_port = self._tcp.sockets[0].getsockname()[1]
         if self.pacer is not None:
             self._pacing = asyncio.create_task(self.pacer.run(self._stop))
+
+    async def _bind(self, loop: asyncio.AbstractEventLoop) -> tuple[asyncio.DatagramTransport, asyncio.Server]:
+        """UDP and TCP sockets on one port number, like the real device: with port 0 the system picks
+        the UDP port, and where that number is taken for TCP another pair is tried (then any TCP port)."""
+        for _attempt in range(_PAIR_ATTEMPTS):
+            udp, _ = await loop.create_datagram_endpoint(lambda: _Udp(self), local_addr=(self.host, self.port))
+            port = self.port or udp.get_extra_info("sockname")[1]
+            try:
+                return udp, await loop.create_server(lambda: _Tcp(self), self.host, port, reuse_address=True)
+            except OSError:
+                udp.close()
+                if self.port:
+                    raise
+        udp, _ = await loop.create_datagram_endpoint(lambda: _Udp(self), local_addr=(self.host, 0))
+        return udp, await loop.create_server(lambda: _Tcp(self), self.host, 0, reuse_address=True)
 
     async def stop(self) -> None:
         """Stop pacing (after a last catch-up) and close the sockets."""

@@ -118,15 +118,17 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
 def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
     """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit."""
     entries = []
-    shared: dict[Entry, Entry] = {}  # equal entries share one object (as in :func:`plan`)
-    negative: list[bool] = []
+    encoded: dict[tuple[tuple[int, ...], tuple[bool, ...]], Entry] = {}  # equal entries: one object, encoded once
+    negative: tuple[bool, ...] | None = None
     for slot in counts:
-        negative = negative or [False] * len(slot)
-        for a, c in enumerate(slot):
-            if c:
-                negative[a] = c < 0
-        entry = encode_entry(slot, negative=negative)
-        entries.append(shared.setdefault(entry, entry))
+        counts_ = slot if isinstance(slot, tuple) else tuple(slot)
+        if negative is None:
+            negative = (False,) * len(counts_)
+        negative = tuple(c < 0 if c else n for c, n in zip(counts_, negative, strict=True))
+        entry = encoded.get((counts_, negative))
+        if entry is None:
+            entry = encoded[counts_, negative] = encode_entry(counts_, negative=negative)
+        entries.append(entry)
     return entries
 
 
