@@ -188,3 +188,23 @@ def test_the_note_example_pin_is_cut_at_every_gate_edge_and_stays_segments() -> 
         assert all(b - a == 20_000 for a, b in inside[1:-1]) and all(a % 50_000 == 0 for a, _ in inside[1:])
     assert len(got) == sum(len([1 for a, _ in got if o <= a < c]) for o, c in windows)  # nothing outside
     assert len(got) > 600 and sim.trace.segments(PIN)["count"].size <= 3 * len(windows)
+
+
+@pytest.mark.fmu
+def test_the_laser_power_of_the_note_example_is_sampled_at_each_gate_edge(tmp_path: Path) -> None:
+    """trio_example (1 pass, Laser FMU sampled every 1 ms): the gate opens at 470_125_100 ns, 0.875 ms before the
+    next 1 ms sample; the laser power has a sample at that tick (0 W: the laser was off) and at every other gate
+    edge, so its rise is drawn from the gate edge, not from the next millisecond."""
+    from cosim.runner import run_scenario
+    from cosim.scenario import load
+
+    result = run_scenario(load("trio_example"), overrides={"passes": "1"}, out=tmp_path / "run", formats=("parquet",))
+    trace = read_trace(result.out if result.out is not None else tmp_path / "run")
+    gate_t, gate_v = trace.edges("trio.axis3.gate")
+    edges = gate_t[1:].tolist()
+    assert len(edges) == 8 and edges[0] == 470_125_100 and gate_v[1] == 1
+    t, power = trace.edges("laser.power")
+    samples = dict(zip(t.tolist(), power.tolist(), strict=True))
+    assert all(edge in samples for edge in edges)
+    assert samples[470_125_100] == 0.0 and samples[471_000_000] > 0.0
+    assert set(t.tolist()) - set(edges) <= {k * MS for k in range(t[-1] // MS + 1)}  # otherwise the 1 ms grid
