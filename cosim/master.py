@@ -241,8 +241,13 @@ class Plant:
         return self.fmu.get(variable)
 
     def record(self, variables: Mapping[str, str] | Sequence[str], *, period: int,
-               start: int | None = None, units: Mapping[str, str] | None = None) -> Callable[[], None]:
-        """Sample outputs every ``period`` ticks at ``start + k*period`` (priority SAMPLE).
+               start: int | None = None, units: Mapping[str, str] | None = None,
+               at_events: bool = True) -> Callable[[], None]:
+        """Sample outputs every ``period`` ticks at ``start + k*period`` (priority SAMPLE), and at events.
+
+        With ``at_events`` the outputs are also sampled at every instant an input changes through
+        :meth:`drive` or :meth:`set` (once, after everything else there) and at the plant's own
+        events (an early return, a watched output changing), without a step of their own.
 
         Numbers and Booleans of any FMI type are recorded as ``real`` signals (integers beyond 2^53
         lose precision there); an array as one signal per element, ``<name>.<i>`` (``<name>.<i>.<j>``
@@ -258,6 +263,9 @@ class Plant:
             First sample time [ticks] (default: now).
         units : mapping, optional
             Units for the trace (default: the FMU's declared units).
+        at_events : bool
+            Also sample at input changes and events (default); False keeps to the grid (as fmpy's
+            ``simulate_fmu`` does).
 
         Returns
         -------
@@ -329,7 +337,8 @@ class Plant:
                     raise
 
         self.sim.process(sample())  # type: ignore[arg-type]
-        self._samplers.append(take)
+        if at_events:
+            self._samplers.append(take)
         return sample_now
 
     def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
