@@ -18,7 +18,9 @@ Tables:
 
 ``edges``     signal, t, value (int64)       bit and int signals: every change
 ``values``    signal, t, value (float64)     real signals: every change or sample
-``segments``  signal, t0, duration, count, dir   pulse-train segments (see :mod:`cosim.pulses`)
+``segments``  signal, t0, duration, count,     pulse-train segments (see :mod:`cosim.pulses`); ``width``:
+              dir, width                     how long each pulse is high [ticks] (the train's
+                                             ``pulse_width``, or the segment's own in a PWM output)
 ``pulses``    signal, t, dir                 pulses recorded one by one
 
 All ``t`` columns are integer ticks. Rows come signal by signal in declaration order, each
@@ -42,7 +44,7 @@ from cosim.trace import Trace
 
 _TABLES = ("edges", "values", "segments", "pulses")
 _COLUMNS = {"edges": ("signal", "t", "value"), "values": ("signal", "t", "value"),
-            "segments": ("signal", "t0", "duration", "count", "dir"), "pulses": ("signal", "t", "dir")}
+            "segments": ("signal", "t0", "duration", "count", "dir", "width"), "pulses": ("signal", "t", "dir")}
 FORMATS = ("vcd", "parquet", "csv")
 META = "trace_meta.json"
 #: Rows gathered before a Parquet row group (or a CSV block) is written.
@@ -174,7 +176,8 @@ def read_tables(trace: Trace, folder: str | Path) -> None:
     for frame in read("segments"):
         for name, group in frame.groupby("signal", sort=False):
             trace.extend_segments(str(name), group["t0"].to_numpy(np.int64), group["duration"].to_numpy(np.int64),
-                                  group["count"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))
+                                  group["count"].to_numpy(np.int64), group["dir"].to_numpy(np.int64),
+                                  group["width"].to_numpy(np.int64) if "width" in group else None)
     for frame in read("pulses"):
         for name, group in frame.groupby("signal", sort=False):
             trace.extend_single_pulses(str(name), group["t"].to_numpy(np.int64), group["dir"].to_numpy(np.int64))

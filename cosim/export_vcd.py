@@ -2,7 +2,8 @@
 
 ``trace.vcd``
     Every signal, for GTKWave and other waveform viewers: bit signals and pulse trains as 1-bit
-    wires (each pulse drawn ``pulse_width`` ticks high), int signals as 64-bit integers, real
+    wires (each pulse drawn its width high: the train's ``pulse_width``, or its segment's
+    ``width`` in a PWM output), int signals as 64-bit integers, real
     signals as reals. Timescale = the trace's resolution. It ends at the run's end (a last
     timestamp at ``end_t``), and when a signal changes more than once at one tick it keeps the
     last value recorded there (a pulse train: a pulse starting where the previous one ends is
@@ -150,10 +151,7 @@ def _levels(trace: Trace, name: str) -> Iterator[tuple[Ints, Floats]]:
     value different from the one before (the first from 0), the last value recorded at each tick."""
     info = trace.info[name]
     prev = np.zeros(1)
-    if info.kind == "pulse":
-        events = _pulse_events(trace, name, max(1, info.pulse_width))
-    else:
-        events = _record_events(trace, name, info.kind)
+    events = _pulse_events(trace, name) if info.kind == "pulse" else _record_events(trace, name, info.kind)
     for t, v in events:
         if not t.size:
             continue
@@ -190,15 +188,16 @@ def _sorted(t: Ints, v: Floats) -> tuple[Ints, Floats]:
     return t[order], v[order]
 
 
-def _pulse_events(trace: Trace, name: str, width: int) -> Iterator[tuple[Ints, Floats]]:
-    """Rises (1) at each pulse and falls (0) ``width`` later, in time order, a fall before a rise at
-    one tick; what lies at or after a piece's last pulse waits for the next piece. The pulses are
-    taken ``_BATCH`` at a time, so that what a suspended generator holds stays small."""
+def _pulse_events(trace: Trace, name: str) -> Iterator[tuple[Ints, Floats]]:
+    """Rises (1) at each pulse and falls (0) its width later (at least one tick), in time order, a
+    fall before a rise at one tick; what lies at or after a piece's last pulse waits for the next
+    piece. The pulses are taken ``_BATCH`` at a time, so that what a suspended generator holds
+    stays small."""
     held_t, held_v = np.empty(0, np.int64), np.empty(0)
-    for chunk, _ in trace.pulse_chunks(name):
+    for chunk, widths in trace.pulse_width_chunks(name):
         for start in range(0, chunk.size, _BATCH):
             t = chunk[start:start + _BATCH]
-            times = np.concatenate([held_t, t + width, t])
+            times = np.concatenate([held_t, t + np.maximum(widths[start:start + _BATCH], 1), t])
             values = np.concatenate([held_v, np.zeros(t.size), np.ones(t.size)])
             order = np.argsort(times * 2 + values.astype(np.int64), kind="stable")  # three sorted runs
             times, values = times[order], values[order]

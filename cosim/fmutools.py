@@ -275,7 +275,7 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
 
     def scenario(run: Run) -> None:
         plant = run.plant(path, name=device, parameters=values)
-        sample = plant.record(names, period=period)
+        sample = plant.record(names, period=period, at_events=False)  # the grid alone, as simulate_fmu
         try:
             run.run_until(run.until)
         except PlantTerminated:

@@ -121,6 +121,7 @@ class Simulation:
         self.trace = Trace(self.timebase)
         self.rng = np.random.default_rng(seed)
         self._closers: list[Callable[[], None]] = []
+        self._stoppers: list[Callable[[int], None]] = []
 
     @property
     def now(self) -> int:
@@ -209,17 +210,28 @@ class Simulation:
         """Register a teardown action (closing FMUs), run by :meth:`close` in reverse order."""
         self._closers.append(closer)
 
+    def on_stop(self, stopper: Callable[[int], None]) -> None:
+        """Call ``stopper(t)`` whenever :meth:`run` returns or fails, with the instant reached.
+
+        For recorders that hold an open stretch (the Trio's PWM output): they write what they hold
+        up to ``t`` into the trace, so that it is complete whenever the run is read.
+        """
+        self._stoppers.append(stopper)
+
     def run(self, until: int) -> None:
         """Run until tick ``until`` (exclusive for events scheduled exactly then).
 
         The trace's end is set to the instant reached, also when a process fails, so whoever
-        writes the trace afterwards (the runner) keeps everything recorded up to that instant.
+        writes the trace afterwards (the runner) keeps everything recorded up to that instant;
+        then the :meth:`on_stop` callbacks are called.
         """
         self.timebase.check_ticks(until, name="until")
         try:
             self.env.run(until=until)
         finally:
             self.trace.end_t = self.now
+            for stopper in self._stoppers:
+                stopper(self.now)
 
     def close(self) -> None:
         """Tear down everything registered with :meth:`on_close`."""

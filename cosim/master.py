@@ -15,7 +15,13 @@ segments) does not advance the plant at all: it is written just before the plant
 whatever asks for that step (:meth:`Plant.before_step`, :meth:`Plant.ahead_writer`).
 
 Never on a fixed grid unless a scenario asks for sampling, so results do not depend on how many
-samples are requested (beyond the FMU's own solver tolerance).
+samples are requested (beyond the FMU's own solver tolerance). Recorded outputs
+(:meth:`Plant.record`) are sampled every period and also where the picture changes: at every
+instant an input changes through :meth:`Plant.drive` or :meth:`Plant.set` (a gate, an enable, a
+command), once per instant after everything else there, and at the plant's events (an early
+return, a watched output changing). Inputs set on a coupling's hot path (:meth:`Plant.setter`,
+:meth:`Plant.ahead_writer`: a stepper's rate or its per-slot pulse segments) add no samples. These
+samples cost no FMU step: the plant is at that instant already.
 
 Every FMI variable type can be read and set (:mod:`cosim.fmuvars`: arrays as numpy arrays);
 numeric and Boolean outputs can be recorded (an array as one trace signal per element,
@@ -100,6 +106,8 @@ class Plant:
         self._watched: dict[str, Signal] = {}
         self._pending: dict[str, float] = {}
         self._before_step: list[Callable[[int], None]] = []
+        self._samplers: list[Callable[[int], None]] = []  # record the sampled outputs at the plant's tick
+        self._sample_at = -1  # the tick of the latest sample asked for by an input change or an event
         sim.on_close(fmu.close)
 
     @classmethod
@@ -144,9 +152,23 @@ class Plant:
             hook(t)
         reached = self.fmu.advance_to(t)
         self.steps += 1
-        while reached < t:  # early return at an event: go on (watched plants never lag now)
+        while reached < t:  # early return at an event: sample there, go on (watched plants never lag now)
+            for take in self._samplers:
+                take(reached)
             reached = self.fmu.advance_to(t)
             self.steps += 1
+
+    def _sample_soon(self, t: int) -> None:
+        """Sample the recorded outputs at tick ``t`` (now or later), after everything else at that tick."""
+        if self._samplers and t != self._sample_at:
+            self._sample_at = t
+            self.sim.call_at(t, Priority.SAMPLE, self._sample_here)
+
+    def _sample_here(self) -> None:
+        # the plant is at this tick already (an input set it there, or the look-ahead found an event
+        # there), or at the instant it terminated: no step
+        for take in self._samplers:
+            take(self.fmu.t)
 
     # -- inputs -----------------------------------------------------------------------------
     def drive(self, variable: str, signal: Signal, *,
@@ -160,6 +182,7 @@ class Plant:
         def on_change(sig: Signal) -> None:
             self.advance()
             self.fmu.set(variable, to_fmu(sig.value))
+            self._sample_soon(self.sim.now)
 
         self.fmu.set(variable, to_fmu(signal.value))
         signal.subscribe(on_change)
@@ -173,6 +196,7 @@ class Plant:
         self.advance()
         for variable, value in values.items():
             self.fmu.set(variable, value)
+        self._sample_soon(self.sim.now)
 
     def setter(self, variables: Sequence[str]) -> Callable[[Sequence[float]], None]:
         """A function that sets the Float64 inputs ``variables`` now (advancing first) in one FMI call.
@@ -217,8 +241,13 @@ class Plant:
         return self.fmu.get(variable)
 
     def record(self, variables: Mapping[str, str] | Sequence[str], *, period: int,
-               start: int | None = None, units: Mapping[str, str] | None = None) -> Callable[[], None]:
-        """Sample outputs every ``period`` ticks at ``start + k*period`` (priority SAMPLE).
+               start: int | None = None, units: Mapping[str, str] | None = None,
+               at_events: bool = True) -> Callable[[], None]:
+        """Sample outputs every ``period`` ticks at ``start + k*period`` (priority SAMPLE), and at events.
+
+        With ``at_events`` the outputs are also sampled at every instant an input changes through
+        :meth:`drive` or :meth:`set` (once, after everything else there) and at the plant's own
+        events (an early return, a watched output changing), without a step of their own.
 
         Numbers and Booleans of any FMI type are recorded as ``real`` signals (integers beyond 2^53
         lose precision there); an array as one signal per element, ``<name>.<i>`` (``<name>.<i>.<j>``
@@ -234,6 +263,9 @@ class Plant:
             First sample time [ticks] (default: now).
         units : mapping, optional
             Units for the trace (default: the FMU's declared units).
+        at_events : bool
+            Also sample at input changes and events (default); False keeps to the grid (as fmpy's
+            ``simulate_fmu`` does).
 
         Returns
         -------
@@ -268,15 +300,15 @@ class Plant:
         last = [-1]  # the tick of the latest sample
 
         def take(t: int) -> None:
+            if last[0] == t:
+                return  # sampled at this tick already (an input change or an event asked first)
             for trace_name, value in zip(names, read(), strict=True):
                 record(trace_name, t, float(value))
             last[0] = t
 
         def sample_now() -> None:
             self.advance()
-            t = fmu.t if fmu.terminated is not None else sim.now  # a terminated plant: its last instant
-            if last[0] != t:
-                take(t)
+            take(fmu.t if fmu.terminated is not None else sim.now)  # a terminated plant: its last instant
 
         def sample() -> object:
             # The hot loop of sampled runs. While nothing else is due before the next sample (no
@@ -305,6 +337,8 @@ class Plant:
                     raise
 
         self.sim.process(sample())  # type: ignore[arg-type]
+        if at_events:
+            self._samplers.append(take)
         return sample_now
 
     def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
@@ -341,6 +375,9 @@ class Plant:
         self._pending = {v: _number(self.fmu.get(v)) for v in self._watched}
         if any(self._pending[v] != s.value for v, s in self._watched.items()):
             self.sim.call_at(reached, Priority.PLANT_EVENT, self._publish_pending)
+            self._sample_soon(reached)
+        elif reached < t_next:  # an event of the plant's own, no watched output changed
+            self._sample_soon(reached)
 
     def _publish_pending(self) -> None:
         values, self._pending = self._pending, {}
@@ -348,8 +385,9 @@ class Plant:
             self._watched[variable].set(value)
 
     def _check_watched(self, now: int) -> None:
-        for variable, out in self._watched.items():
-            out.set(_number(self.fmu.get(variable)))
+        changed = [out.set(_number(self.fmu.get(variable))) for variable, out in self._watched.items()]
+        if any(changed):
+            self._sample_soon(now)
 
 
 def _number(value: Value) -> float:

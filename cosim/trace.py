@@ -15,6 +15,9 @@ Kinds of record (all times are integer ticks of the trace's resolution):
 * ``real`` signals: value changes or samples ``(t, value)`` (analog outputs at requested times);
 * ``pulse`` trains: segments ``(t0, duration, count, dir)`` placed by the rule of
   :mod:`cosim.pulses`, plus any pulses given one by one; :meth:`Trace.pulses` materialises them.
+  Each pulse is high for the train's ``pulse_width``, or, in a train declared with
+  ``varying_width`` (a PWM output, whose mark follows the duty), for its segment's own ``width``:
+  :meth:`Trace.pulse_widths` gives every pulse's width, and the segments always have a ``width``.
 
 Memory: each table (a signal's records, a train's segments, its single pulses) keeps at most
 ``spill_rows`` rows in memory; beyond that the rows go to disk in chunks as the run goes (see
@@ -55,6 +58,8 @@ Int8s = npt.NDArray[np.int8]
 CHUNK_PULSES = 1 << 18
 _VALUE_FIELDS = (("t", "q"), ("v", "d"))
 _SEGMENT_FIELDS = (("t0", "q"), ("duration", "q"), ("count", "q"), ("dir", "b"))
+_WIDTH_SEGMENT_FIELDS = (*_SEGMENT_FIELDS, ("width", "q"))
+SEGMENT_COLUMNS = ("t0", "duration", "count", "dir", "width")
 _SINGLE_FIELDS = (("t", "q"), ("dir", "b"))
 
 
@@ -70,13 +75,17 @@ class SignalInfo:
     description : str
         One line for humans.
     pulse_width : int
-        For pulse trains: width of each drawn pulse [ticks] (VCD only).
+        For pulse trains: width of each pulse [ticks] (where a pulse falls in the VCD); in a train
+        with ``varying_width``, of its single pulses only.
+    varying_width : bool
+        For pulse trains: each segment carries its own pulse width [ticks] (a PWM output).
     """
 
     kind: str
     unit: str = ""
     description: str = ""
     pulse_width: int = 1
+    varying_width: bool = False
 
 
 @dataclass
@@ -117,8 +126,12 @@ class Trace:
 
     # -- declaring and recording -------------------------------------------------------------
     def declare(self, name: str, kind: str, *, unit: str = "", description: str = "",
-                pulse_width: int = 1) -> None:
-        """Declare a signal before recording it (names are checked against the scheme)."""
+                pulse_width: int = 1, varying_width: bool = False) -> None:
+        """Declare a signal before recording it (names are checked against the scheme).
+
+        A pulse train with ``varying_width`` takes a ``width`` with each segment
+        (:meth:`record_segment`); otherwise each pulse is ``pulse_width`` ticks wide.
+        """
         if not _NAME.match(name):
             raise ConfigurationError(
                 f"signal name {name!r} does not follow the scheme <device>.<axis>.<signal> "
@@ -128,12 +141,14 @@ class Trace:
             raise ConfigurationError.out_of_range(f"kind of {name}", kind, ", ".join(KINDS))
         if name in self.info:
             raise ConfigurationError(f"signal {name!r} is declared twice")
-        self.info[name] = SignalInfo(kind, unit, description, pulse_width)
+        if varying_width and kind != "pulse":
+            raise ConfigurationError(f"signal {name!r} is a {kind} signal: only a pulse train has a varying width")
+        self.info[name] = SignalInfo(kind, unit, description, pulse_width, varying_width)
         key = f"{len(self.info):04d}-{name}"
         if kind == "pulse":
             self._pulses[name] = _PulseChannel(
-                Columns(_SEGMENT_FIELDS, spool=self._spool, key=key + ".segments", limit=self.spill_rows,
-                        segments=True),
+                Columns(_WIDTH_SEGMENT_FIELDS if varying_width else _SEGMENT_FIELDS, spool=self._spool,
+                        key=key + ".segments", limit=self.spill_rows, segments=True),
                 Columns(_SINGLE_FIELDS, spool=self._spool, key=key + ".pulses", limit=self.spill_rows))
         else:
             self._values[name] = Columns(_VALUE_FIELDS, spool=self._spool, key=key, limit=self.spill_rows)
@@ -147,10 +162,19 @@ class Trace:
         if len(t_column) >= columns.limit:
             columns.spill()
 
-    def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int) -> None:
-        """Record ``count`` pulses spread over ``[t0, t0+duration)`` (rule of :mod:`cosim.pulses`)."""
+    def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int, *,
+                       width: int | None = None) -> None:
+        """Record ``count`` pulses spread over ``[t0, t0+duration)`` (rule of :mod:`cosim.pulses`).
+
+        ``width`` [ticks]: how long each pulse of the segment is high; required by a train declared
+        with ``varying_width``, refused by the others (their pulses are ``pulse_width`` wide).
+        """
         columns = self._pulses[name].segments
-        for column, value in zip(columns.arrays, (t0, duration, count, direction), strict=True):
+        row = (t0, duration, count, direction) if width is None else (t0, duration, count, direction, width)
+        if len(row) != len(columns.arrays):
+            raise ConfigurationError(f"a segment of {name} takes {'a' if len(row) == 4 else 'no'} width: the train "
+                                     f"is declared {'with' if len(row) == 4 else 'without'} varying_width")
+        for column, value in zip(columns.arrays, row, strict=True):
             column.append(value)
         columns.appended()
 
@@ -353,14 +377,20 @@ class Trace:
 
     def segment_chunks(self, name: str) -> Iterator[dict[str, npt.NDArray[np.int64]]]:
         """Raw pulse segments of a pulse train chunk by chunk: :meth:`segments` in bounded memory."""
-        for t0, duration, count, direction in self._train(name).segments.chunks():
-            yield {"t0": t0, "duration": duration, "count": count, "dir": direction.astype(np.int64)}
+        train, width = self._train(name), self.info[name].pulse_width
+        for chunk in train.segments.chunks():
+            t0, duration, count, direction = chunk[:4]
+            yield {"t0": t0, "duration": duration, "count": count, "dir": direction.astype(np.int64),
+                   "width": chunk[4] if len(chunk) > 4 else np.full(t0.size, width, dtype=np.int64)}
 
     def segments(self, name: str) -> dict[str, npt.NDArray[np.int64]]:
-        """Raw pulse segments of a pulse train: arrays ``t0, duration, count, dir``."""
+        """Raw pulse segments of a pulse train: arrays ``t0, duration, count, dir, width``.
+
+        ``width`` [ticks] is how long each pulse of the segment is high: the segment's own in a
+        train declared with ``varying_width``, else the train's ``pulse_width``.
+        """
         parts = list(self.segment_chunks(name))
-        keys = ("t0", "duration", "count", "dir")
-        return {k: np.concatenate([p[k] for p in parts]) if parts else np.empty(0, np.int64) for k in keys}
+        return {k: np.concatenate([p[k] for p in parts]) if parts else np.empty(0, np.int64) for k in SEGMENT_COLUMNS}
 
     def single_pulse_chunks(self, name: str) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
         """``(t, dir)`` of the pulses recorded one by one, chunk by chunk, in recording order."""
@@ -403,6 +433,33 @@ class Trace:
             yield from chunks
             return
         yield from cast("Iterator[tuple[Ints, Int8s]]", merge_sorted([chunks, train.singles.chunks()]))
+
+    def pulse_width_chunks(self, name: str) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]]:
+        """``(t, width)`` of every pulse of a pulse train in time order, chunk by chunk: each pulse's
+        instant (its rising edge) and how long it is high [ticks]; it falls at ``t + width``."""
+        info, train = self.info[name], self._train(name)
+        if not info.varying_width:
+            for t, _ in self.pulse_chunks(name):
+                yield t, np.full(t.size, info.pulse_width, dtype=np.int64)
+            return
+        singles = ((t, np.full(t.size, info.pulse_width, dtype=np.int64)) for t, _ in train.singles.chunks())
+        if train.segments.in_order() and train.singles.in_order():
+            yield from cast("Iterator[tuple[Ints, Ints]]", merge_sorted(
+                [segment_pulses(train.segments, self.chunk_pulses, column=4), singles]))
+            return
+        seg = self.segments(name)
+        parts = [(materialize_pulses(seg["t0"], seg["duration"], seg["count"]), np.repeat(seg["width"], seg["count"])),
+                 *singles]
+        t, width = np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+        order = np.argsort(t, kind="stable")
+        yield t[order], width[order]
+
+    def pulse_widths(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+        """``(t, width)`` of every pulse of a pulse train, whole (see :meth:`pulse_width_chunks`)."""
+        parts = list(self.pulse_width_chunks(name))
+        if not parts:
+            return np.empty(0, np.int64), np.empty(0, np.int64)
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
 
     def pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
         """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order.
@@ -454,7 +511,7 @@ class Trace:
         trace.meta = dict(header.get("meta", {}))
         for name, info in header["signals"].items():
             trace.declare(name, info["kind"], unit=info["unit"], description=info["description"],
-                          pulse_width=info["pulse_width"])
+                          pulse_width=info["pulse_width"], varying_width=bool(info.get("varying_width", False)))
         return trace
 
     def extend(self, name: str, t: npt.ArrayLike, value: npt.ArrayLike) -> None:
@@ -462,10 +519,19 @@ class Trace:
         self._columns(name).extend((np.asarray(t, dtype=np.int64), np.asarray(value, dtype=np.float64)))
 
     def extend_segments(self, name: str, t0: npt.ArrayLike, duration: npt.ArrayLike, count: npt.ArrayLike,
-                        direction: npt.ArrayLike) -> None:
-        """Append many segments of a pulse train at once (see :meth:`record_segment`)."""
-        self._train(name).segments.extend(tuple(np.asarray(c, dtype=np.int64)
-                                                for c in (t0, duration, count, direction)))
+                        direction: npt.ArrayLike, width: npt.ArrayLike | None = None) -> None:
+        """Append many segments of a pulse train at once (see :meth:`record_segment`).
+
+        ``width`` is kept for a train declared with ``varying_width`` (which needs it) and ignored
+        for the others (a table's ``width`` column holds their ``pulse_width``).
+        """
+        train, columns = self._train(name), [t0, duration, count, direction]
+        if self.info[name].varying_width:
+            if width is None:
+                raise ConfigurationError(f"the segments of {name} need a width: the train is declared with "
+                                         "varying_width")
+            columns.append(width)
+        train.segments.extend(tuple(np.asarray(c, dtype=np.int64) for c in columns))
 
     def extend_single_pulses(self, name: str, t: npt.ArrayLike, direction: npt.ArrayLike) -> None:
         """Append many pulses given one by one (see :meth:`record_pulse`)."""

@@ -281,9 +281,15 @@ def _merged(parts: list[Chunk]) -> Chunk:
     return tuple(c[order] for c in joined)
 
 
-def segment_pulses(segments: Columns, limit: int) -> Iterator[tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]]:
-    """Pulses of time-ordered segments, chunk by chunk, at most ``limit`` at a time (long segments split)."""
-    for t0, duration, count, direction in segments.chunks():
+def segment_pulses(segments: Columns, limit: int, *, column: int = 3) -> Iterator[tuple[npt.NDArray[np.int64],
+                                                                                      npt.NDArray[Any]]]:
+    """Pulses of time-ordered segments, chunk by chunk, at most ``limit`` at a time (long segments split).
+
+    Yields ``(t, value)``: each pulse's instant and its segment's column ``column`` (3: the direction;
+    4: the width, for a train whose segments carry one).
+    """
+    for chunk in segments.chunks():
+        t0, duration, count, value = chunk[0], chunk[1], chunk[2], chunk[column]
         ends = np.cumsum(count)
         total = int(ends[-1]) if ends.size else 0
         a = 0
@@ -295,7 +301,7 @@ def segment_pulses(segments: Columns, limit: int) -> Iterator[tuple[npt.NDArray[
             first = np.maximum(a - begins, 0)
             stop = np.minimum(b - begins, count[i0:i1])
             t = materialize_pulses(t0[i0:i1], duration[i0:i1], count[i0:i1], first=first, stop=stop)
-            d = np.repeat(direction[i0:i1], stop - first)
+            d = np.repeat(value[i0:i1], stop - first)
             t.setflags(write=False)
             yield t, d
             a = b

@@ -183,7 +183,15 @@ def _expected(trace: Trace, name: str) -> list[tuple[int, object]]:
     info = trace.info[name]
     if info.kind == "pulse":
         times = trace.pulses(name)[0].tolist()
-        events = sorted([(t + info.pulse_width, 0) for t in times] + [(t, 1) for t in times])  # fall first
+        widths = [info.pulse_width] * len(times)
+        if info.varying_width:  # a PWM output: pulse k of a segment rises at t0 + k*duration//count, width wide
+            seg = trace.segments(name)
+            pulses = sorted((t0 + k * duration // count, width) for t0, duration, count, width in zip(
+                seg["t0"].tolist(), seg["duration"].tolist(), seg["count"].tolist(), seg["width"].tolist(),
+                strict=True) for k in range(count))
+            times, widths = [t for t, _ in pulses], [w for _, w in pulses]
+        falls = [(t + w, 0) for t, w in zip(times, widths, strict=True)]
+        events = sorted(falls + [(t, 1) for t in times])  # fall first
         return _shown(events, 0)
     t, v = trace.edges(name)
     values: list[object] = [float(x) if info.kind == "real" else int(x) for x in v.tolist()]

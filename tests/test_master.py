@@ -76,11 +76,43 @@ def test_result_does_not_depend_on_random_extra_reads() -> None:
     assert energy == pytest.approx(closed_form(), rel=1e-12)
 
 
-def test_samples_land_on_k_times_period() -> None:
-    _, _, sim = laser_run(sample_ns=250 * US)
+def test_samples_land_on_k_times_period_and_at_every_input_change() -> None:
+    """Every 250 us, and at the gate changes off that grid (300 us, 2.1 ms, 3.05 ms; 7.5 ms is on it)."""
+    _, steps, sim = laser_run(sample_ns=250 * US)
     t, power = sim.trace.edges("laser.power")
-    assert t.tolist() == [k * 250 * US for k in range(40)]  # [0, until): nothing runs at until itself
+    assert t.tolist() == sorted([k * 250 * US for k in range(40)] + [300 * US, 2_100 * US, 3_050 * US])
     assert power[0] == 0.0 and power.max() > 10.0
+    assert steps == 39 + 3 + 1  # a step per sample after 0 and per gate change off the grid, one for the read
+
+
+def test_a_gate_change_is_sampled_at_its_tick_without_a_step_of_its_own() -> None:
+    """Sampled every 1 ms: the laser power has a sample at each gate change (300 us: still 0 W; 2.1 ms:
+    the highest so far), and the FMU steps exactly as often as with no samples at the changes (4 gate changes,
+    9 samples after 0, the final read)."""
+    _, steps, sim = laser_run(sample_ns=MS)
+    t, power = sim.trace.edges("laser.power")
+    assert t.tolist() == sorted([k * MS for k in range(10)] + [300 * US, 2_100 * US, 3_050 * US, 7_500 * US])
+    at = dict(zip(t.tolist(), power.tolist(), strict=True))
+    assert at[300 * US] == 0.0 and at[2_100 * US] == max(v for k, v in at.items() if k <= 2_100 * US) > 0.0
+    assert steps == 4 + 9 + 1
+
+
+def test_inputs_set_on_a_hot_path_add_no_samples_and_a_plant_event_does() -> None:
+    """A Stepper at 4000 steps/s from 1.5 ms (set with a setter, as a coupling does every slot: no sample
+    there) reaches its limit switch at 0.1 mm: the watched switch turns on at an event of the FMU, and the
+    carriage position has a sample at that very tick."""
+    with Simulation() as sim:
+        stepper = Plant.load(sim, "Stepper", name="stepper", parameters={"limit_pos_position": 1e-4})
+        stepper.watch("limit_pos")
+        stepper.record(["carriage_position"], period=MS)
+        set_rate = stepper.setter(["step_rate"])
+        sim.call_at(1_500 * US, 30, lambda: set_rate([4000.0]))
+        sim.run(until=20 * MS)
+        t_switch, on = sim.trace.edges("stepper.limit_pos")
+        trip = int(t_switch[on == 1][0])
+        t, _ = sim.trace.edges("stepper.carriage_position")
+    assert trip % MS != 0  # an instant off the sampling grid
+    assert t.tolist() == sorted([k * MS for k in range(20)] + [trip])
 
 
 def test_unknown_variable_names_the_plant_and_suggests() -> None:

@@ -147,3 +147,40 @@ def test_same_scenario_twice_gives_bit_identical_exports(tmp_path: Path) -> None
             out = write_trace(sim.trace, tmp_path / str(run), formats=("vcd", "csv"))
         digests.append({p.name: p.read_bytes() for p in sorted(out.iterdir())})
     assert digests[0] == digests[1]
+
+
+def test_a_train_with_a_varying_width_keeps_each_segments_width_through_spills(tmp_path: Path) -> None:
+    """A PWM-like train: 3 pulses 400 wide every 1000 ticks, then one cut to 17, then 2 pulses 250 wide; kept
+    two rows at a time in memory, read whole, in chunks of 2 pulses and back from Parquet."""
+    from cosim.trace import Trace
+
+    trace = Trace(spill_rows=2, chunk_pulses=2, spool=tmp_path / "spool")
+    trace.declare("dev.axis1.pwm", "pulse", varying_width=True)
+    for row in ((0, 3000, 3, 1, 400), (3000, 17, 1, 1, 17), (5000, 2000, 2, 1, 250)):
+        trace.record_segment("dev.axis1.pwm", *row[:4], width=row[4])
+    trace.end_t = 8000
+    expected = ([0, 1000, 2000, 3000, 5000, 6000], [400, 400, 400, 17, 250, 250])
+    t, width = trace.pulse_widths("dev.axis1.pwm")
+    assert (t.tolist(), width.tolist()) == expected
+    chunks = list(trace.pulse_width_chunks("dev.axis1.pwm"))
+    assert max(c[0].size for c in chunks) <= 2 and trace.spilled_rows() == 2
+    assert trace.segments("dev.axis1.pwm")["width"].tolist() == [400, 17, 250]
+    write_trace(trace, tmp_path / "out", formats=("parquet",))
+    back = read_trace(tmp_path / "out")
+    assert back.info["dev.axis1.pwm"].varying_width
+    assert tuple(a.tolist() for a in back.pulse_widths("dev.axis1.pwm")) == expected
+
+
+def test_widths_are_required_where_they_vary_and_refused_elsewhere(sim: Simulation) -> None:
+    _scenario(sim)
+    assert sim.trace.segments("dev.axis1.step")["width"].tolist() == [100, 100]  # the declared pulse_width
+    assert sim.trace.pulse_widths("dev.axis1.step")[1].tolist() == [100] * 5
+    with pytest.raises(ConfigurationError, match="takes no width"):
+        sim.trace.record_segment("dev.axis1.step", 4000, 100, 1, 1, width=30)
+    sim.trace.declare("dev.axis1.pwm", "pulse", varying_width=True)
+    with pytest.raises(ConfigurationError, match="takes a width"):
+        sim.trace.record_segment("dev.axis1.pwm", 4000, 100, 1, 1)
+    with pytest.raises(ConfigurationError, match="need a width"):
+        sim.trace.extend_segments("dev.axis1.pwm", [0], [10], [1], [1])
+    with pytest.raises(ConfigurationError, match="only a pulse train has a varying width"):
+        sim.trace.declare("dev.axis1.level", "bit", varying_width=True)

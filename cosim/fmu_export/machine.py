@@ -132,8 +132,9 @@ class WatchedTrace(Trace):
 
         return both
 
-    def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int) -> None:
-        super().record_segment(name, t0, duration, count, direction)
+    def record_segment(self, name: str, t0: int, duration: int, count: int, direction: int, *,
+                       width: int | None = None) -> None:
+        super().record_segment(name, t0, duration, count, direction, width=width)
         if name in self.pulse_watches:
             self.pulse_watches[name].segment(t0, duration, count, direction)
 

@@ -48,6 +48,7 @@ from cosim.controllers.trio.params import (
     FIRST_OUTPUT,
     PWM_AXES,
     PWM_CLOCK_HZ,
+    PWM_CLOCK_NS,
     PWM_ENCODER_MODULUS,
     PWM_REGISTER_MAX,
     READ_ONLY_AXIS_PARAMS,
@@ -58,6 +59,7 @@ from cosim.controllers.trio.params import (
 )
 from cosim.controllers.trio.paths import ArcPath
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
+from cosim.controllers.trio.pwm_output import PwmOutput
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.kernel import Simulation
 from cosim.signals import PulseTrain, PwmPort, Signal, StepDirPort
@@ -122,6 +124,10 @@ class TrioController:
         self.console = Console(sim, device)
         self.wdog = SettledSignal(sim, f"{device}.wdog", kind="bit",
                                   description="WDOG: drive enable; OFF switches the PWM outputs off")
+        clock_ticks = sim.ticks(PWM_CLOCK_NS, "ns", name="PWM clock period (50 ns)")
+        #: The PWM output pins in the trace (``trio.axisN.pwm_out``), by axis.
+        self.pwm_outputs = {n: PwmOutput(sim, f"{self.axes[n].prefix}.pwm_out", self.pwm_port(n),
+                                         clock_ticks=clock_ticks) for n in PWM_AXES}
         self.buffers = MoveBuffers(sim, self.axes)
         #: Running programs by process number, and the programs RUN can start by name.
         self.processes: dict[int, Any] = {}
