@@ -109,6 +109,7 @@ def write_page(entry: Entry, *, out: Path, library: Path | None = None) -> Path:
     from bokeh.resources import Resources
 
     from cosim.export import META, read_trace
+    from cosim.report.pulses_js import PULSES_JS
     from cosim.report.waveform import build, violations_of
     from cosim.report.xy import xy_paths
 
@@ -117,6 +118,7 @@ def write_page(entry: Entry, *, out: Path, library: Path | None = None) -> Path:
         scripts = Resources(mode="inline", components=["bokeh"]).render_js()
     else:
         scripts = f"<script src='{os.path.relpath(library, entry.folder).replace(os.sep, '/')}'></script>"
+    scripts += f"<script>{PULSES_JS}</script>"  # window.cosimPulses: the rule the waveform uses, for a reader
     script = div = ""
     notes: list[str] = []
     signals: list[str] = []
