@@ -65,7 +65,7 @@ def test_every_signal_has_its_row_and_glyph_in_the_layout() -> None:
     for name in ("dev.x.dir", "dev.silent", "dev.mode", "dev.x.pos"):
         data = _model(wave.layout, f"wave:{name}:line").data_source.data
         assert data["t"][-1] == 1_000_000  # every line reaches the end of the run
-    assert _model(wave.layout, "wave:dev.x.step:rate").data_source.data["rate"] == [20_000.0]
+    assert _model(wave.layout, "wave:dev.x.step:rate").data_source.data["rate"].tolist() == [20_000.0]
 
 
 def test_pulse_train_rate_per_segment_is_signed_by_direction_and_single_pulses_become_segments() -> None:

@@ -155,23 +155,25 @@ def _row(name: str, kind: str, title: str, x_range: Any) -> Any:
     title_style: Any = plot.title
     title_style.text_font_size = "11px"
     title_style.text_font_style = "normal"
-    plot.yaxis.major_label_text_font_size = "10px"
-    plot.xgrid.grid_line_alpha = 0.4
-    plot.ygrid.grid_line_alpha = 0.3
+    # the axes and grids by position, not plot.yaxis / plot.xgrid: those search the whole model graph
+    plot.left[0].major_label_text_font_size = "10px"
+    for grid in plot.center:
+        grid.grid_line_alpha = 0.35
     return plot
 
 
 def _value_row(plot: Any, name: str, line: Held, *, kind: str) -> None:
     from bokeh.models import ColumnDataSource, FixedTicker, Range1d
 
-    source = ColumnDataSource({"t": line.t.tolist(), "v": line.value.tolist()}, name=f"wave:{name}:data")
+    source = ColumnDataSource({"t": line.t.astype(np.float64), "v": line.value.astype(np.float64)},
+                              name=f"wave:{name}:data")
     colour = "#2a9d3f" if kind == "bit" else "#333333"
     plot.step("t", "v", source=source, mode="after", line_width=1.4, color=colour, name=f"wave:{name}:line")
     finite = line.value[np.isfinite(line.value)]
     low, high = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0)
     if kind == "bit":
         low, high = min(low, 0.0), max(high, 1.0)
-        plot.yaxis.ticker = FixedTicker(ticks=[0, 1])
+        plot.left[0].ticker = FixedTicker(ticks=[0, 1])
     pad = (high - low) * 0.1 or max(abs(high) * 0.1, 0.5)
     plot.y_range = Range1d(start=low - pad, end=high + pad)
 
@@ -179,10 +181,10 @@ def _value_row(plot: Any, name: str, line: Held, *, kind: str) -> None:
 def _pulse_row(plot: Any, name: str, drawn: Train, *, width: int) -> dict[str, Any]:
     from bokeh.models import BasicTicker, ColumnDataSource, HoverTool, Range1d
 
-    rates = ColumnDataSource({"left": drawn.left.tolist(), "right": drawn.right.tolist(),
-                              "rate": drawn.rate_hz.tolist()}, name=f"wave:{name}:rates")
-    segments = ColumnDataSource({"t0": drawn.t0.tolist(), "duration": drawn.duration.tolist(),
-                                 "count": drawn.count.tolist(), "dir": drawn.direction.tolist()},
+    rates = ColumnDataSource({"left": drawn.left.astype(np.float64), "right": drawn.right.astype(np.float64),
+                              "rate": drawn.rate_hz.astype(np.float64)}, name=f"wave:{name}:rates")
+    segments = ColumnDataSource({"t0": drawn.t0.astype(np.float64), "duration": drawn.duration.astype(np.float64),
+                                 "count": drawn.count.astype(np.float64), "dir": drawn.direction.astype(np.float64)},
                                 name=f"wave:{name}:segments")
     pulses = ColumnDataSource({"left": [], "right": [], "colour": []}, name=f"wave:{name}:pulse_data")
     rate = plot.quad(left="left", right="right", bottom=0, top="rate", source=rates, fill_color=UP,
@@ -195,12 +197,13 @@ def _pulse_row(plot: Any, name: str, drawn: Train, *, width: int) -> dict[str, A
     pad = (high - low) * 0.08
     plot.y_range = Range1d(start=low - pad, end=high + pad)
     title_style: Any = plot.title
-    plot.yaxis.axis_label = "pulses/s"
-    plot.yaxis.axis_label_text_font_size = "9px"
-    plot.yaxis.ticker = BasicTicker(desired_num_ticks=3)
+    axis = plot.left[0]
+    axis.axis_label = "pulses/s"
+    axis.axis_label_text_font_size = "9px"
+    axis.ticker = BasicTicker(desired_num_ticks=3)
     if not drawn.pulses:
         title_style.text += "  (no pulses in this run)"
-    return {"axis": plot.yaxis[0], "segments": segments, "pulses": pulses, "rate_renderer": rate,
+    return {"axis": axis, "segments": segments, "pulses": pulses, "rate_renderer": rate,
             "pulse_renderer": shown,
             "y": plot.y_range, "width": width, "rate_low": low - pad, "rate_high": high + pad,
             "expandable": drawn.expandable}
@@ -214,10 +217,9 @@ def _violation_row(marks: Sequence[Marked], source: Any, x_range: Any) -> Any:
     plot.name = "violations"
     plot.height = 40 + 22 * len(checks)
     plot.y_range = Range1d(start=len(checks) - 0.5, end=-0.5)
-    plot.yaxis.ticker = FixedTicker(ticks=list(range(len(checks))))
-    plot.yaxis.major_label_overrides = {k: _short(c) for k, c in enumerate(checks)}
-    plot.min_border_left = _LEFT
-    plot.yaxis.major_label_text_font_size = "10px"
+    axis = plot.left[0]
+    axis.ticker = FixedTicker(ticks=list(range(len(checks))))
+    axis.major_label_overrides = {k: _short(c) for k, c in enumerate(checks)}
     markers = plot.scatter("t", "row", source=source, marker="inverted_triangle", size=11, color=VIOLATION,
                            name="violations:markers")
     first = {m.check: m for m in sorted(marks, key=lambda m: m.t, reverse=True)}  # each check's first
@@ -240,10 +242,11 @@ def _axes(figures: list[Any], ms_per_tick: float) -> None:
     formatter = CustomJSTickFormatter(args={"scale": ms_per_tick},
                                       code="return Number((tick * scale).toPrecision(12)).toString();")
     for k, plot in enumerate(figures):
-        plot.xaxis.formatter = formatter
-        plot.xaxis.visible = k == len(figures) - 1
+        axis = plot.below[0]
+        axis.formatter = formatter
+        axis.visible = k == len(figures) - 1
         if k == len(figures) - 1:
-            plot.xaxis.axis_label = "t [ms]"
+            axis.axis_label = "t [ms]"
             plot.height += 40
     if figures:
         top: Any = LinearAxis(axis_label="t [ms]")

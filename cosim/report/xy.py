@@ -54,8 +54,8 @@ def _path(trace: Trace, gate: str) -> Any:
     x, y, lit = x[index], y[index], on[index] > 0
     plot = figure(title=f"XY path ({x_name}, {y_name}); red where {gate} is on", match_aspect=True,
                   width=560, height=460, name=f"xy:{gate}", tools="pan,wheel_zoom,box_zoom,reset,save")
-    plot.line(x.tolist(), y.tolist(), color="#a6a6a6", line_width=1, legend_label="path")
-    source = ColumnDataSource({"x": np.where(lit, x, np.nan).tolist(), "y": np.where(lit, y, np.nan).tolist()})
+    plot.line(x.astype(np.float64), y.astype(np.float64), color="#a6a6a6", line_width=1, legend_label="path")
+    source = ColumnDataSource({"x": np.where(lit, x, np.nan), "y": np.where(lit, y, np.nan)})
     plot.line("x", "y", source=source, color="#d62728", line_width=2.2, legend_label="gate on")
     plot.xaxis.axis_label = x_name
     plot.yaxis.axis_label = y_name
