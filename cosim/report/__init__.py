@@ -36,9 +36,14 @@ ASSETS = "report_files"
 
 
 class _Described(Protocol):
-    name: str
-    path: Path
-    description: str
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def path(self) -> Path: ...
+
+    @property
+    def description(self) -> str: ...
 
 
 def describe(scenario: _Described) -> str:

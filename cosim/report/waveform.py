@@ -149,7 +149,7 @@ def _marks_data(marks: Sequence[Marked], ms_per_tick: float) -> dict[str, Any]:
 def _row(name: str, kind: str, title: str, x_range: Any) -> Any:
     from bokeh.plotting import figure
 
-    plot = figure(x_range=x_range, height=_HEIGHT[kind], sizing_mode="stretch_width", name=f"wave:{name}",
+    plot: Any = figure(x_range=x_range, height=_HEIGHT[kind], sizing_mode="stretch_width", name=f"wave:{name}",
                   tools="xpan,xwheel_zoom,xbox_zoom,reset,save", min_border_left=_LEFT, min_border_right=10,
                   min_border_top=4, min_border_bottom=4, title=title)
     title_style: Any = plot.title
