@@ -45,13 +45,14 @@ _LEFT = 70  # px left of every plot area, so that the rows line up
 
 @dataclass(frozen=True)
 class Marked:
-    """A violation to mark: the check's name, its time [ticks] and what it found."""
+    """A violation to mark: the check's name, its time [ticks], what it found, the check's number (1 = first)."""
 
     check: str
     t: int
     value: str = ""
     limit: str = ""
     detail: str = ""
+    number: int = 0
 
 
 @dataclass
@@ -71,11 +72,11 @@ def violations_of(checks: Sequence[Mapping[str, Any]], resolution_s: Fraction) -
     """The violations of ``result.json``'s checks as marks (at most :data:`MAX_VIOLATIONS` per check)."""
     marks: list[Marked] = []
     notes = []
-    for check in checks:
+    for number, check in enumerate(checks, 1):
         listed = [v for v in check.get("violations", []) if v.get("t_ns") is not None]
         for v in listed[:MAX_VIOLATIONS]:
             marks.append(Marked(str(check["name"]), ticks_of_ns(v["t_ns"], resolution_s), str(v.get("value", "")),
-                                str(v.get("limit", "")), str(v.get("detail") or "")))
+                                str(v.get("limit", "")), str(v.get("detail") or ""), number))
         total = int(check.get("n_violations", len(listed)))
         if total > min(len(listed), MAX_VIOLATIONS):
             notes.append(f"check {check['name']!r}: {min(len(listed), MAX_VIOLATIONS):,} of its {total:,} "
@@ -213,17 +214,20 @@ def _violation_row(marks: Sequence[Marked], source: Any, x_range: Any) -> Any:
     from bokeh.models import FixedTicker, HoverTool, Range1d
 
     checks = list(dict.fromkeys(m.check for m in marks))
-    plot = _row("violations", "int", "check violations (hover for value and limit)", x_range)
+    numbers = {m.check: m.number for m in marks}
+    plot = _row("violations", "int", "check violations (numbered as in the table of checks; hover for value and limit)",
+                x_range)
     plot.name = "violations"
     plot.height = 40 + 22 * len(checks)
     plot.y_range = Range1d(start=len(checks) - 0.5, end=-0.5)
     axis = plot.left[0]
     axis.ticker = FixedTicker(ticks=list(range(len(checks))))
-    axis.major_label_overrides = {k: _short(c) for k, c in enumerate(checks)}
+    axis.major_label_overrides = {k: f"check {numbers[c]}" if numbers[c] else _short(c) for k, c in enumerate(checks)}
     markers = plot.scatter("t", "row", source=source, marker="inverted_triangle", size=11, color=VIOLATION,
                            name="violations:markers")
     first = {m.check: m for m in sorted(marks, key=lambda m: m.t, reverse=True)}  # each check's first
-    plot.text(x=[m.t for m in first.values()], y=[checks.index(c) for c in first], text=list(first),
+    plot.text(x=[m.t for m in first.values()], y=[checks.index(c) for c in first],
+              text=list(first),
               x_offset=8, y_offset=6, text_font_size="10px", text_color=VIOLATION, name="violations:labels")
     plot.add_tools(HoverTool(renderers=[markers], tooltips=[("check", "@check"), ("t [ms]", "@t_ms{0.000000}"),
                                                              ("value", "@value"), ("limit", "@limit"),
