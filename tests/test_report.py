@@ -203,3 +203,13 @@ def test_summary_shows_each_verdict_as_written(tmp_path: Path, verdict: str) -> 
     (out / "a").mkdir(parents=True)
     write_site([Entry("a", out / "a", {"verdict": verdict, "checks": []})], out)
     assert f'data-verdict="{verdict}"' in (out / "report.html").read_text()
+
+
+def test_a_page_describes_a_scenario_with_its_whole_docstring_and_a_machine_with_its_description() -> None:
+    from cosim.catalog import examples, load
+    from cosim.report import describe
+
+    text = describe(load("laser_pwm"))
+    assert text.startswith("Laser PWM: a 40 W CO2 laser gated on twice") and "gate_ms" in text
+    mill = load(next(p for p in examples() if p.name == "mill.toml"))
+    assert describe(mill) == mill.description != ""
