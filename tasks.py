@@ -5,7 +5,7 @@ Usage::
 
     python3 tasks.py main       # set up, build the FMUs, run every bundled scenario, write the report
     python3 tasks.py test       # set up, build the FMUs, lint, type-check, build the docs, run the test suite
-                                #   (installs the Debian packages the tests use where missing: sigrok-cli)
+                                #   (installs the Debian packages the tests use where missing: sigrok-cli, chromium)
     python3 tasks.py notebooks  # set up with JupyterLab, register the kernel, open the notebooks
                                 #   (--execute: run them all into results/notebooks/ instead)
     python3 tasks.py docs       # build the documentation site into site/ (--serve: live preview)
@@ -35,7 +35,7 @@ BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
 PY = BIN / ("python.exe" if os.name == "nt" else "python")
 KERNEL = "cosim"
 #: Debian packages the test suite uses, by the command each provides (tests that need one skip without it).
-TEST_PACKAGES = {"sigrok-cli": "sigrok-cli"}
+TEST_PACKAGES = {"sigrok-cli": "sigrok-cli", "chromium": "chromium"}
 
 
 def _say(text: str) -> None:

@@ -44,9 +44,11 @@ def main_job(out: Path) -> int:
             fmubuild.ensure_fmu(model, version)
     staged = OutputFolder(out)
     results = []
+    scenarios = []
     names: list[str | Path] = [*bundled(), *examples()]
     for name in names:
         scenario = load(name)
+        scenarios.append(scenario)
         print(f"running {scenario.name} ...", flush=True)
         results.append(run_scenario(scenario, out=staged.staging / scenario.name, progress=True))
         if results[-1].verdict == "INTERRUPTED":
@@ -57,7 +59,7 @@ def main_job(out: Path) -> int:
     (staged.staging / "summary.json").write_text(to_json([r.to_dict() for r in results]))
     from cosim.report import write_report
 
-    write_report(results, staged.staging)
+    write_report(results, staged.staging, scenarios=scenarios)
     staged.commit()
     print(f"report: {out / 'report.html'}")
     bad = [r.scenario for r in results if r.verdict != "PASS"]

@@ -1,0 +1,64 @@
+"""The browser's copy of the pulse rule, and the callback that draws pulses when few are visible.
+
+:data:`PULSES_JS` defines ``cosimPulses(seg, start, end, cap)``: the pulses of the segments ``seg``
+(``{t0, duration, count, dir}``, arrays of exact integers in ticks, in order of ``t0``) inside the
+window ``[start, end]``, placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a segment at
+``t0 + floor(k * duration / count)``), or ``null`` when there are more than ``cap``. Integer
+division is corrected after the float division, so the instants are exact while the products stay
+below 2**53 (a segment's ``duration * count``). The browser test runs it against
+:func:`cosim.pulses.materialize_pulses`.
+
+:data:`SWITCH_JS` is the body of the ``CustomJS`` that runs when the time range changes (and once
+when the page is ready): for each pulse train, the visible pulses when there are at most ``cap``,
+else its rate.
+"""
+
+from __future__ import annotations
+
+PULSES_JS = """
+function cosimPulses(seg, start, end, cap) {
+  const fdiv = (a, b) => {  // floor(a / b) of integers, exact while a < 2**53
+    let q = Math.floor(a / b);
+    if (q * b > a) { q -= 1; } else if ((q + 1) * b <= a) { q += 1; }
+    return q;
+  };
+  const lo = Math.ceil(start), hi = Math.floor(end);
+  const t = [], dir = [];
+  for (let i = 0; i < seg.t0.length; i++) {
+    const t0 = seg.t0[i], d = seg.duration[i], c = seg.count[i];
+    if (t0 > hi) { break; }
+    if (c <= 0 || t0 + d <= lo) { continue; }
+    const from = Math.min(Math.max(lo - t0, 0), d), to = Math.min(Math.max(hi - t0 + 1, 0), d);
+    const kmin = -fdiv(-from * c, d);          // first k with floor(k d / c) >= lo - t0
+    const kmax = Math.min(c - 1, fdiv(to * c - 1, d));  // last k with floor(k d / c) <= hi - t0
+    if (kmax < kmin) { continue; }
+    if (t.length + kmax - kmin + 1 > cap) { return null; }
+    for (let k = kmin; k <= kmax; k++) { t.push(t0 + fdiv(k * d, c)); dir.push(seg.dir[i]); }
+  }
+  return {t: t, dir: dir};
+}
+"""
+
+SWITCH_JS = PULSES_JS + """
+for (const tr of trains) {
+  const seg = tr.segments.data;
+  const found = tr.expandable ? cosimPulses(seg, xr.start, xr.end, cap) : null;
+  if (found === null) {
+    tr.pulses.data = {left: [], right: [], colour: []};
+    tr.pulse_renderer.visible = false;
+    tr.rate_renderer.visible = true;
+    tr.y.setv({start: tr.rate_low, end: tr.rate_high});
+    tr.axis.axis_label = "pulses/s";
+  } else {
+    tr.pulses.data = {
+      left: found.t,
+      right: found.t.map((v) => v + tr.width),
+      colour: found.dir.map((d) => (d == 1 ? up : down)),
+    };
+    tr.pulse_renderer.visible = true;
+    tr.rate_renderer.visible = false;
+    tr.y.setv({start: -0.2, end: 1.3});
+    tr.axis.axis_label = "pulses";
+  }
+}
+"""
