@@ -151,16 +151,20 @@ def test_the_pages_pulse_rule_is_cosims(site: Path, browser: Any) -> None:
     duration = rng.integers(1, 2_000_000, n)
     count = np.minimum(rng.integers(1, 400, n), duration)
     t0 = 4_000_000_000 + np.cumsum(np.r_[0, duration[:-1] + rng.integers(0, 1000, n - 1)])  # long runs: big ticks
-    segments = {"t0": t0.tolist(), "duration": duration.tolist(), "count": count.tolist(), "dir": [1] * n}
+    width = rng.integers(1, 50, n)  # a PWM output's mark differs from segment to segment
+    segments = {"t0": t0.tolist(), "duration": duration.tolist(), "count": count.tolist(), "dir": [1] * n,
+                "width": width.tolist()}
     every = materialize_pulses(t0, duration, count)
+    every_width = np.repeat(width, count)
     page, _ = _open(browser, _pages(site)[0])
     page.wait_for_function(READY)
     windows = [(float(t0[0] - 5), float(t0[-1] + duration[-1] + 5))]
     windows += [tuple(sorted(rng.uniform(t0[0], t0[-1] + duration[-1], 2).tolist())) for _ in range(30)]
     for start, end in windows:
         found = page.evaluate("([s, a, b]) => cosimPulses(s, a, b, 1e9)", [segments, start, end])
-        expected = every[(every >= np.ceil(start)) & (every <= np.floor(end))]
-        assert found["t"] == expected.tolist(), (start, end)
+        inside = (every >= np.ceil(start)) & (every <= np.floor(end))
+        assert found["t"] == every[inside].tolist(), (start, end)
+        assert found["width"] == every_width[inside].tolist(), (start, end)
     over = page.evaluate("([s, a, b]) => cosimPulses(s, a, b, 10)", [segments, windows[0][0], windows[0][1]])
     page.close()
     assert over is None  # more than the cap: the caller draws the rate

@@ -1,9 +1,9 @@
 """The browser's copy of the pulse rule, and the callback that draws pulses when few are visible.
 
 :data:`PULSES_JS` defines ``cosimPulses(seg, start, end, cap)``: the pulses of the segments ``seg``
-(``{t0, duration, count, dir}``, arrays of exact integers in ticks, in order of ``t0``) inside the
-window ``[start, end]``, placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a segment at
-``t0 + floor(k * duration / count)``), or ``null`` when there are more than ``cap``. Integer
+(``{t0, duration, count, dir, width}``, arrays of exact integers in ticks, in order of ``t0``) inside
+the window ``[start, end]``, placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a segment at
+``t0 + floor(k * duration / count)``, ``width`` ticks high), or ``null`` when there are more than ``cap``. Integer
 division is corrected after the float division, so the instants are exact while the products stay
 below 2**53 (a segment's ``duration * count``). The browser test runs it against
 :func:`cosim.pulses.materialize_pulses`.
@@ -23,7 +23,7 @@ function cosimPulses(seg, start, end, cap) {
     return q;
   };
   const lo = Math.ceil(start), hi = Math.floor(end);
-  const t = [], dir = [];
+  const t = [], dir = [], w = [];
   for (let i = 0; i < seg.t0.length; i++) {
     const t0 = seg.t0[i], d = seg.duration[i], c = seg.count[i];
     if (t0 > hi) { break; }
@@ -33,9 +33,11 @@ function cosimPulses(seg, start, end, cap) {
     const kmax = Math.min(c - 1, fdiv(to * c - 1, d));  // last k with floor(k d / c) <= hi - t0
     if (kmax < kmin) { continue; }
     if (t.length + kmax - kmin + 1 > cap) { return null; }
-    for (let k = kmin; k <= kmax; k++) { t.push(t0 + fdiv(k * d, c)); dir.push(seg.dir[i]); }
+    for (let k = kmin; k <= kmax; k++) {
+      t.push(t0 + fdiv(k * d, c)); dir.push(seg.dir[i]); w.push(seg.width ? seg.width[i] : 1);
+    }
   }
-  return {t: t, dir: dir};
+  return {t: t, dir: dir, width: w};
 }
 """
 
@@ -52,7 +54,7 @@ for (const tr of trains) {
   } else {
     tr.pulses.data = {
       left: found.t,
-      right: found.t.map((v) => v + tr.width),
+      right: found.t.map((v, i) => v + found.width[i]),
       colour: found.dir.map((d) => (d == 1 ? up : down)),
     };
     tr.pulse_renderer.visible = true;

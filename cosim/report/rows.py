@@ -51,8 +51,9 @@ class Held:
 class Train:
     """A pulse train as drawn.
 
-    ``t0, duration, count, direction``: the segments (and single pulses as segments of one pulse)
-    in time order, for expansion into pulses (empty when ``expandable`` is false).
+    ``t0, duration, count, direction, width``: the segments (and single pulses as segments of one
+    pulse) in time order, for expansion into pulses, each pulse ``width`` ticks high (the declared
+    pulse width, or the segment's own: a PWM output); empty when ``expandable`` is false.
     ``left, right, rate_hz``: the rate blocks drawn zoomed out [ticks, ticks, pulses/s, signed].
     """
 
@@ -60,6 +61,7 @@ class Train:
     duration: Ints
     count: Ints
     direction: Ints
+    width: Ints
     left: Ints
     right: Ints
     rate_hz: Floats
@@ -142,7 +144,7 @@ def _sorted(t: Ints, v: Floats) -> tuple[Ints, Floats]:
 def train(trace: Trace, name: str, *, max_segments: int = MAX_SEGMENTS, buckets: int = BUCKETS) -> Train:
     """A pulse train's segments (for expansion) and rate blocks, at most ``max_segments`` of each."""
     rate_scale = 1 / float(trace.timebase.resolution_s)  # ticks per second
-    parts = {k: [] for k in ("t0", "duration", "count", "dir")}  # type: dict[str, list[Ints]]
+    parts = {k: [] for k in ("t0", "duration", "count", "dir", "width")}  # type: dict[str, list[Ints]]
     n_segments = n_singles = pulses = 0
     overflow = False
     for seg in trace.segment_chunks(name):
@@ -170,9 +172,9 @@ def train(trace: Trace, name: str, *, max_segments: int = MAX_SEGMENTS, buckets:
                      f"{buckets:,} slices of the run only (no single pulses here; open trace.vcd)")
         left, right, rate = _binned_rate(trace, name, buckets=buckets, rate_scale=rate_scale)
         empty = np.empty(0, np.int64)
-        return Train(empty, empty, empty, empty, left, right, rate, pulses, False, notes)
-    t0, duration, count, direction = (np.concatenate(parts[k]) if parts[k] else np.empty(0, np.int64)
-                                      for k in ("t0", "duration", "count", "dir"))
+        return Train(empty, empty, empty, empty, empty, left, right, rate, pulses, False, notes)
+    t0, duration, count, direction, width = (np.concatenate(parts[k]) if parts[k] else np.empty(0, np.int64)
+                                             for k in ("t0", "duration", "count", "dir", "width"))
     sign = np.where(direction == 1, 1.0, -1.0)
     left, right = t0, t0 + duration
     rate = sign * count / duration * rate_scale
@@ -186,7 +188,8 @@ def train(trace: Trace, name: str, *, max_segments: int = MAX_SEGMENTS, buckets:
         duration = np.r_[duration, np.ones_like(st)][order]
         count = np.r_[count, np.ones_like(st)][order]
         direction = np.r_[direction, sd][order]
-    return Train(t0, duration, count, direction, left, right, rate, pulses, True, notes)
+        width = np.r_[width, np.full_like(st, max(trace.info[name].pulse_width, 1))][order]
+    return Train(t0, duration, count, direction, width, left, right, rate, pulses, True, notes)
 
 
 def _binned(t: Ints, d: Ints, *, end_t: int, buckets: int, rate_scale: float) -> tuple[Ints, Ints, Floats]:

@@ -12,7 +12,7 @@ Each signal's row is a figure named ``wave:<signal>`` (the dotted trace name), i
 ``wave:<signal>:line`` (a value held to the run's end), or ``wave:<signal>:rate`` and
 ``wave:<signal>:pulses`` for a pulse train: zoomed out a train shows its rate (pulses/s, negative
 for direction 0) per segment; when the visible window holds at most :data:`PULSE_CAP` pulses the
-browser expands the segments into pulses (``pulse_width`` ticks high, see
+browser expands the segments into pulses (each its segment's width high, see
 :mod:`cosim.report.pulses_js`). Every violation is a dashed red line on every row.
 
 The view opens on the first violation (a window of a twentieth of the run around it), else on the
@@ -117,7 +117,7 @@ def build(trace: Trace, marks: Sequence[Marked], *, pulse_cap: int = PULSE_CAP) 
                     f"{': ' + info.description if info.description else ''}", x_range)
         if info.kind == "pulse":
             drawn = train(trace, name)
-            trains.append(_pulse_row(plot, name, drawn, width=max(info.pulse_width, 1)))
+            trains.append(_pulse_row(plot, name, drawn))
             notes += [f"{name}: {n}" for n in drawn.notes]
         else:
             line = held(trace, name)
@@ -179,13 +179,14 @@ def _value_row(plot: Any, name: str, line: Held, *, kind: str) -> None:
     plot.y_range = Range1d(start=low - pad, end=high + pad)
 
 
-def _pulse_row(plot: Any, name: str, drawn: Train, *, width: int) -> dict[str, Any]:
+def _pulse_row(plot: Any, name: str, drawn: Train) -> dict[str, Any]:
     from bokeh.models import BasicTicker, ColumnDataSource, HoverTool, Range1d
 
     rates = ColumnDataSource({"left": drawn.left.astype(np.float64), "right": drawn.right.astype(np.float64),
                               "rate": drawn.rate_hz.astype(np.float64)}, name=f"wave:{name}:rates")
     segments = ColumnDataSource({"t0": drawn.t0.astype(np.float64), "duration": drawn.duration.astype(np.float64),
-                                 "count": drawn.count.astype(np.float64), "dir": drawn.direction.astype(np.float64)},
+                                 "count": drawn.count.astype(np.float64), "dir": drawn.direction.astype(np.float64),
+                                 "width": np.maximum(drawn.width, 1).astype(np.float64)},
                                 name=f"wave:{name}:segments")
     pulses = ColumnDataSource({"left": [], "right": [], "colour": []}, name=f"wave:{name}:pulse_data")
     rate = plot.quad(left="left", right="right", bottom=0, top="rate", source=rates, fill_color=UP,
@@ -206,7 +207,7 @@ def _pulse_row(plot: Any, name: str, drawn: Train, *, width: int) -> dict[str, A
         title_style.text += "  (no pulses in this run)"
     return {"axis": axis, "segments": segments, "pulses": pulses, "rate_renderer": rate,
             "pulse_renderer": shown,
-            "y": plot.y_range, "width": width, "rate_low": low - pad, "rate_high": high + pad,
+            "y": plot.y_range, "rate_low": low - pad, "rate_high": high + pad,
             "expandable": drawn.expandable}
 
 
