@@ -24,6 +24,7 @@ import difflib
 import re
 import shutil
 import tempfile
+import traceback
 import zipfile
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
@@ -57,6 +58,7 @@ def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
     try:
         model = read_model_description(str(path))
     except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
+        traceback.clear_frames(exc.__traceback__)  # fmpy's frames hold the FMU's file open: close it now
         raise FmuError(f"{path}: cannot read modelDescription.xml ({_reason(path, exc)}); "
                        "`python -m fmpy validate` on the file lists what is wrong with it") from exc
     if cosimulation and model.coSimulation is None:
