@@ -206,6 +206,7 @@ class DeviceServer:
                     break
                 transport.close()
         self._udp = transport
+        assert self._tcp is not None  # every way out of the loop above set it or raised
         self.tcp_port = self._tcp.sockets[0].getsockname()[1]
         if self.pacer is not None:
             self._pacing = asyncio.create_task(self.pacer.run(self._stop))
