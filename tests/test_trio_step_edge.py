@@ -37,9 +37,9 @@ def test_note_example_gate_edges_sit_on_the_falling_edge_of_the_counted_pulse_in
     sim.run(until=2 * 3200 * MS)
     write_trace(sim.trace, tmp_path, formats=("vcd",))
     vcd = vcdvcd.VCDVCD(str(tmp_path / "trace.vcd"))
-    falls = np.array([t for t, v in vcd["trio.axis3.step"].tv if v == "0" and t > 0])
-    rises = np.array([t for t, v in vcd["trio.axis3.step"].tv if v == "1"])
-    gate = [(t, int(v)) for t, v in vcd["trio.axis3.gate"].tv if t > 0]
+    falls = np.array([t for t, v in vcd["trio.axis3.trio_axis3_step"].tv if v == "0" and t > 0])
+    rises = np.array([t for t, v in vcd["trio.axis3.trio_axis3_step"].tv if v == "1"])
+    gate = [(t, int(v)) for t, v in vcd["trio.axis3.trio_axis3_gate"].tv if t > 0]
     assert (falls - rises == 100).all()  # 100 ns pulses, the model's default width
     counts = [int(np.searchsorted(falls, t, side="right")) for t, _ in gate[:8]]
     assert counts == [1761, 1841, 3121, 3521, 9600 - 3519, 9600 - 3119, 9600 - 1839, 9600 - 1759]
