@@ -104,9 +104,9 @@ class Result:
         ``HAZARD MISSED`` a declared hazard (``run.hazard``) was not shown: its check passed or
                           examined nothing;
         ``HAZARD SHOWN``  every declared hazard was shown: its check failed with violations;
+        ``TERMINATED``    a plant ended the run early (no check failed up to then);
         ``UNCHECKED``     no checks; or every check examined nothing (``checked == 0``, even with
                           ``allow_empty``); or a check examined nothing without ``allow_empty``;
-        ``TERMINATED``    a plant ended the run early (every check passed up to then);
         ``PASS``          otherwise: every check passed, and something was checked.
         """
         if self.interrupted is not None:
@@ -120,9 +120,11 @@ class Result:
             return "HAZARD MISSED"
         if hazards:
             return "HAZARD SHOWN"
+        if self.terminated is not None:
+            return "TERMINATED"
         if not self.checks or self.unchecked or all(int(c["checked"]) == 0 for c in self.checks):
             return "UNCHECKED"
-        return "TERMINATED" if self.terminated is not None else "PASS"
+        return "PASS"
 
     @property
     def hazards(self) -> list[dict[str, Any]]:
@@ -273,8 +275,8 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         try:
             with interrupts_raise():
                 scenario.function(run)
-                if sim.now < end:
-                    sim.run(until=end)
+                if sim.now < run.until:  # a scenario that ends on its own may have ended the run early
+                    sim.run(until=run.until)
         except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the run ends here, with what it simulated
             result.interrupted = {"signal": str(exc) or "SIGINT", "t_ticks": sim.now,
                                   "t_s": sim.timebase.seconds(sim.now)}
@@ -296,6 +298,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             if bar is not None:
                 _close_progress_bar(bar, sim)
             sim.trace.end_t = sim.now if stop is None else stop
+        result.until = run.until
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
         result.notes = list(run.notes)

@@ -246,17 +246,18 @@ class Run:
     def run_job(self, done: Callable[[], bool], *, step: int, what: str = "the job") -> bool:
         """Run in steps of ``step`` [ticks] until ``done()`` is true or the run's end; True if the job is done.
 
-        For scenarios that end on their own (their ``UNTIL`` is then a safety limit): the run stops
-        when the job is done, or at ``--until`` if that comes first. A job cut short by the end gets a
-        note saying so (``what`` names the job in it): checks of the whole job then fail, they do not
-        pass on part of it.
+        For scenarios that end on their own (their ``UNTIL`` is then a safety limit): the run ends
+        when the job is done (``until`` becomes that instant: the runner runs no further), or at
+        ``--until`` if that comes first. A job cut short by the end gets a note saying so (``what``
+        names the job in it): checks of the whole job then fail, they do not pass on part of it.
         """
         while not done() and self.sim.now < self.until:
             self.sim.run(until=min(self.sim.now + step, self.until))
         if done():
+            self.until = self.sim.now
             return True
         self.note(f"the run ended at {self.sim.timebase.seconds(self.sim.now):g} s (until) before {what} "
-                  "was done: checks of the whole job do not hold for the part simulated")
+                  "ended: checks of the whole job do not hold for the part simulated")
         return False
 
 
