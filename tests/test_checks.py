@@ -158,6 +158,7 @@ def test_allow_empty_accepts_an_empty_signal(make: Callable[[], Check], signal: 
     res = dataclasses.replace(make(), allow_empty=True).evaluate(_empty_trace())
     assert res.passed and res.outcome == "PASS" and res.checked == 0 and res.violations == ()
     assert res.nothing_checked == ""
+    assert res.summary() == f"PASS {res.name}: 0 checked (nothing to examine; allowed for this check)"
 
 
 def test_duration_without_a_start_event_is_unchecked_saying_so() -> None:

@@ -139,6 +139,8 @@ class CheckResult:
         """
         if self.outcome == "UNCHECKED":
             return f"UNCHECKED {self.name}: 0 checked ({self.nothing_checked})"
+        if self.checked == 0 and not self.n_violations:  # allow_empty: a pass, but say that nothing was examined
+            return f"PASS {self.name}: 0 checked (nothing to examine; allowed for this check)"
         verdict = self.outcome
         plural = "" if self.n_violations == 1 else "s"
         line = f"{verdict} {self.name}: {self.checked} checked, {self.n_violations} violation{plural}"
