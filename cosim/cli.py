@@ -1,9 +1,10 @@
 """The ``cosim`` command line.
 
-Exit status: 0 when every check passed, 1 when a check failed or a run broke, 2 for usage or
-configuration errors (a parameter out of range, an unknown scenario, a broken script), 3 when a
-plant FMU ended the run early (verdict TERMINATED: not a failure of the checks, which all passed
-up to that instant).
+Exit status, by verdict (see :attr:`cosim.runner.Result.verdict`): 0 for PASS and HAZARD SHOWN, 1 for
+FAIL, HAZARD MISSED and ERROR, 2 for usage or configuration errors (a parameter out of range, an unknown
+scenario, a broken script, an ``--until`` the scenario refuses), 3 for TERMINATED (a plant FMU ended the
+run early; the checks passed up to that instant), 4 for UNCHECKED (nothing was checked; 0 with
+``--allow-unchecked``), 130 for INTERRUPTED.
 
 Each sub-command is two small functions, ``_args_<name>(parser)`` (its arguments) and
 ``cmd_<name>(args) -> exit status``, and one line in :data:`COMMANDS`. Command functions import
@@ -23,10 +24,16 @@ from typing import Any
 from cosim import __version__
 from cosim.errors import ConfigurationError, CosimError, ScenarioError
 
-EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
-EPILOG = ("Exit status: 0 all checks passed, 1 a check failed or a run broke, 2 usage/configuration error, "
-          "3 a plant FMU ended the run early (TERMINATED; the checks up to then passed), 130 interrupted "
-          "(Ctrl-C or SIGTERM: what was simulated is written, verdict INTERRUPTED).")
+EXIT_PASS, EXIT_FAIL, EXIT_USAGE, EXIT_TERMINATED, EXIT_UNCHECKED, EXIT_INTERRUPTED = 0, 1, 2, 3, 4, 130
+#: Exit status of each verdict (a configuration error is EXIT_USAGE whatever the verdict).
+EXIT_STATUS = {"PASS": EXIT_PASS, "HAZARD SHOWN": EXIT_PASS, "FAIL": EXIT_FAIL, "HAZARD MISSED": EXIT_FAIL,
+               "ERROR": EXIT_FAIL, "TERMINATED": EXIT_TERMINATED, "UNCHECKED": EXIT_UNCHECKED,
+               "INTERRUPTED": EXIT_INTERRUPTED}
+EPILOG = ("Exit status: 0 PASS (every check passed) or HAZARD SHOWN (the hazard the scenario demonstrates "
+          "happened); 1 FAIL (a check failed), HAZARD MISSED (the declared hazard did not happen) or ERROR (the "
+          "run broke); 2 usage/configuration error; 3 TERMINATED (a plant FMU ended the run early; the checks up "
+          "to then passed); 4 UNCHECKED (no checks, or they examined nothing; 0 with --allow-unchecked); 130 "
+          "INTERRUPTED (Ctrl-C or SIGTERM: what was simulated is written).")
 #: How many failing sweep runs are listed with their reason before the rest is only counted.
 SHOWN_FAILURES = 5
 
@@ -68,6 +75,12 @@ def _args_run(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
                         help="format of the trace tables (default parquet)")
     parser.add_argument("--no-vcd", action="store_true", help="do not write trace.vcd")
+    _allow_unchecked(parser)
+
+
+def _allow_unchecked(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--allow-unchecked", action="store_true",
+                        help="exit 0, not 4, when the verdict is UNCHECKED (no checks, or they examined nothing)")
 
 
 def _parse_sets(pairs: Sequence[str]) -> dict[str, str]:
@@ -107,15 +120,18 @@ def cmd_run(args: argparse.Namespace) -> int:
                           out=out, formats=formats, progress=True)
     print(result.table())
     print(f"results in {out}/ (result.json, {'trace.vcd, ' if not args.no_vcd else ''}{args.format} tables)")
-    return _exit_status(result)
+    return _exit_status(result, allow_unchecked=args.allow_unchecked)
 
 
-def _exit_status(result: Any) -> int:
+def _exit_status(result: Any, *, allow_unchecked: bool = False) -> int:
+    """The exit status of a run's verdict (:data:`EXIT_STATUS`)."""
     if result.verdict == "INTERRUPTED":
         return EXIT_INTERRUPTED
     if result.error_kind == "configuration":
         return EXIT_USAGE
-    return {"PASS": EXIT_PASS, "TERMINATED": EXIT_TERMINATED}.get(result.verdict, EXIT_FAIL)
+    if result.verdict == "UNCHECKED" and allow_unchecked:
+        return EXIT_PASS
+    return EXIT_STATUS.get(result.verdict, EXIT_FAIL)
 
 
 def _args_check_machine(parser: argparse.ArgumentParser) -> None:
@@ -282,7 +298,7 @@ def cmd_run_fmu(args: argparse.Namespace) -> int:
                      formats=("vcd", args.format), progress=True)
     print(result.table())
     print(f"results in {out}/ (result.json, trace.vcd, {args.format} tables: every numeric output on the grid)")
-    return _exit_status(result)
+    return _exit_status(result, allow_unchecked=True)  # an FMU run alone declares no checks: UNCHECKED, exit 0
 
 
 # -- sweep ----------------------------------------------------------------------------------------
@@ -426,7 +442,8 @@ COMMANDS: tuple[Command, ...] = (
             description="Simulate one co-simulation FMU with the master, start values from --set, every "
                         "numeric output recorded on a grid (0, step, 2 step, ... and the end), and write the "
                         "usual result folder (result.json, trace.vcd, tables). An FMU that asks to end the "
-                        "simulation ends the run there (verdict TERMINATED, exit status 3).",
+                        "simulation ends the run there (verdict TERMINATED, exit status 3). It declares no checks: "
+                        "its verdict is UNCHECKED, with exit status 0.",
             epilog="example: cosim run-fmu models/fmi3/Stepper.fmu --set step_rate=2000 --until '50 ms' "
                    "--step '1 ms'"),
     Command("sweep", cmd_sweep, "run a scenario over a parameter grid and/or seeded random samples, on Dask",

@@ -3,7 +3,7 @@
 :func:`run_scenario` resolves the parameters, builds the simulation through the scenario's
 recipe, runs it, evaluates every declared check on the trace and writes the results folder:
 
-``result.json``        scenario, parameter values used, seed, each check, figures, verdict
+``result.json``        scenario, parameter values used, seed, each check, declared hazards, figures, verdict
 ``trace.vcd``          every signal, for GTKWave and other waveform viewers; ``trace.gtkw`` opens it in
                        GTKWave; ``trace_digital.vcd`` holds the bits and pulse trains for sigrok/PulseView
 ``*.parquet``          the trace tables (see :mod:`cosim.export`), or ``*.csv`` and ``trace_wide.csv``
@@ -65,26 +65,82 @@ class Result:
     out: Path | None = None
 
     @property
+    def ordinary(self) -> list[dict[str, Any]]:
+        """The checks that are not declared hazards."""
+        return [c for c in self.checks if not c.get("hazard")]
+
+    @property
+    def hazard_checks(self) -> list[dict[str, Any]]:
+        """The declared hazards (``run.hazard``): checks expected to fail."""
+        return [c for c in self.checks if c.get("hazard")]
+
+    @property
     def passed(self) -> int:
-        return sum(1 for c in self.checks if c["passed"])
+        """Ordinary checks that passed."""
+        return sum(1 for c in self.ordinary if c["passed"])
 
     @property
     def failed(self) -> int:
-        return len(self.checks) - self.passed
+        """Ordinary checks that failed (a violation, or the check could not be evaluated)."""
+        return sum(1 for c in self.ordinary if outcome(c) in ("FAIL", "ERROR"))
+
+    @property
+    def unchecked(self) -> int:
+        """Ordinary checks that examined nothing (outcome ``UNCHECKED``)."""
+        return sum(1 for c in self.ordinary if outcome(c) == "UNCHECKED")
+
+    @property
+    def shown(self) -> int:
+        """Declared hazards that were shown (their check failed with violations)."""
+        return sum(1 for c in self.hazard_checks if hazard_shown(c))
 
     @property
     def verdict(self) -> str:
-        """``PASS`` (every check passed), ``FAIL`` (a check failed), ``ERROR`` (the run broke, or a
-        check or figure could not be evaluated), ``TERMINATED`` (a plant ended the run early and every
-        check passed up to then) or ``INTERRUPTED`` (Ctrl-C or SIGTERM ended it; what it simulated is
-        written and checked)."""
+        """The run's verdict; the first that applies of:
+
+        ``INTERRUPTED``   Ctrl-C or SIGTERM ended it (what it simulated is written and checked);
+        ``ERROR``         the run broke, or a check or figure could not be evaluated;
+        ``FAIL``          an ordinary check failed (had a violation);
+        ``HAZARD MISSED`` a declared hazard (``run.hazard``) was not shown: its check passed or
+                          examined nothing;
+        ``HAZARD SHOWN``  every declared hazard was shown: its check failed with violations;
+        ``TERMINATED``    a plant ended the run early (no check failed up to then);
+        ``UNCHECKED``     no checks; or every check examined nothing (``checked == 0``, even with
+                          ``allow_empty``); or a check examined nothing without ``allow_empty``;
+        ``PASS``          otherwise: every check passed, and something was checked.
+        """
         if self.interrupted is not None:
             return "INTERRUPTED"
         if self.error is not None:
             return "ERROR"
         if self.failed:
             return "FAIL"
-        return "TERMINATED" if self.terminated is not None else "PASS"
+        hazards = self.hazard_checks
+        if self.shown < len(hazards):
+            return "HAZARD MISSED"
+        if hazards:
+            return "HAZARD SHOWN"
+        if self.terminated is not None:
+            return "TERMINATED"
+        if not self.checks or self.unchecked or all(int(c["checked"]) == 0 for c in self.checks):
+            return "UNCHECKED"
+        return "PASS"
+
+    @property
+    def hazards(self) -> list[dict[str, Any]]:
+        """The declared hazards for ``result.json``: check name, what it shows, whether it was shown."""
+        return [{"check": c["name"], "shows": c["hazard"], "shown": hazard_shown(c)} for c in self.hazard_checks]
+
+    def counts(self) -> str:
+        """The checks in a few words: ``3/3 checks passed``, ``1/1 hazards shown, 2/2 checks passed``."""
+        parts = []
+        if self.hazard_checks:
+            parts.append(f"{self.shown}/{len(self.hazard_checks)} hazards shown")
+        if self.ordinary or not self.checks:
+            parts.append(f"{self.passed}/{len(self.ordinary)} checks passed")
+        if self.unchecked:
+            parts.append(f"{self.unchecked} examined nothing")
+        return ", ".join(parts)
 
     @property
     def real_time_factor(self) -> float:
@@ -98,8 +154,11 @@ class Result:
             "parameters": self.parameters,
             "seed": self.seed,
             "until_ticks": self.until,
-            "summary": {"checks": len(self.checks), "passed": self.passed, "failed": self.failed},
-            "checks": self.checks,
+            "summary": {"checks": len(self.checks), "passed": self.passed, "failed": self.failed,
+                        "unchecked": self.unchecked, "hazards": len(self.hazard_checks),
+                        "hazards_shown": self.shown},
+            "hazards": self.hazards,
+            "checks": [{**c, "verdict": check_outcome(c)} for c in self.checks],
             "figures": self.figures,
             "error": self.error,
             "terminated": self.terminated,
@@ -112,12 +171,15 @@ class Result:
 
     def table(self) -> str:
         """Plain-text check table for the terminal."""
-        lines = [f"scenario {self.scenario}: {self.verdict}  "
-                 f"({self.passed}/{len(self.checks)} checks passed, {self.simulated_s:g} s simulated "
+        lines = [f"scenario {self.scenario}: {self.verdict}  ({self.counts()}, {self.simulated_s:g} s simulated "
                  f"in {self.wall_time_s:.2f} s)"]
         for check in self.checks:
-            lines.append(f"  {'PASS' if check['passed'] else 'FAIL'}  {check['name']}  "
+            lines.append(f"  {check_outcome(check)}  {check['name']}  "
                          f"[{check['checked']} checked, {check['n_violations']} violations]")
+            if check.get("hazard"):
+                lines.append(f"          hazard: {check['hazard']}")
+            if check.get("nothing_checked"):
+                lines.append(f"          examined nothing: {check['nothing_checked']}")
             for v in check["violations"][:3]:
                 lines.append(f"          at t={v['t_ns']} ns: value {v['value']} vs limit {v['limit']}"
                              + (f" ({v['detail']})" if v.get("detail") else ""))
@@ -134,6 +196,25 @@ class Result:
                          f"t = {self.terminated['t_s']:g} s: {self.terminated['reason']}")
             lines += [f"    {line}" for line in self.terminated["log"][-5:]]
         return "\n".join(lines)
+
+
+def outcome(check: dict[str, Any]) -> str:
+    """A check entry's outcome, hazard or not: ``PASS``, ``FAIL``, ``UNCHECKED`` or ``ERROR``."""
+    if check.get("error"):
+        return "ERROR"
+    return str(check.get("outcome") or ("PASS" if check["passed"] else "FAIL"))
+
+
+def hazard_shown(check: dict[str, Any]) -> bool:
+    """A declared hazard is shown when its check failed with violations (not when it examined nothing)."""
+    return outcome(check) == "FAIL" and int(check["n_violations"]) > 0
+
+
+def check_outcome(check: dict[str, Any]) -> str:
+    """What the table says of one check: its outcome, or ``HAZARD SHOWN``/``HAZARD MISSED`` for a hazard."""
+    if check.get("hazard") and outcome(check) != "ERROR":
+        return "HAZARD SHOWN" if hazard_shown(check) else "HAZARD MISSED"
+    return outcome(check)
 
 
 def _plain(value: Any) -> Any:
@@ -187,15 +268,15 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             sim.trace.spool_dir = staged.staging  # a long run spills its trace beside its results, not to /tmp
         sim.trace.meta.update({"scenario": scenario.name, "seed": seed, "parameters": values})
         result = Result(scenario.name, values, seed, end)
-        run = Run(sim=sim, p=Values(values), until=end)
+        run = Run(sim=sim, p=Values(values), until=end, scenario=scenario.name)
         started = time.perf_counter()
         bar = _progress_bar(sim, end) if progress else None
         stop: int | None = None
         try:
             with interrupts_raise():
                 scenario.function(run)
-                if sim.now < end:
-                    sim.run(until=end)
+                if sim.now < run.until:  # a scenario that ends on its own may have ended the run early
+                    sim.run(until=run.until)
         except KeyboardInterrupt as exc:  # Ctrl-C or SIGTERM: the run ends here, with what it simulated
             result.interrupted = {"signal": str(exc) or "SIGINT", "t_ticks": sim.now,
                                   "t_s": sim.timebase.seconds(sim.now)}
@@ -217,6 +298,7 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
             if bar is not None:
                 _close_progress_bar(bar, sim)
             sim.trace.end_t = sim.now if stop is None else stop
+        result.until = run.until
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
         result.notes = list(run.notes)
@@ -252,13 +334,14 @@ def interrupts_raise() -> Iterator[None]:
 
 def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
     """Every check and figure on its own: one that raises is an error entry, the others still count."""
-    for spec, declared in zip(run.checks, run.declared, strict=True):
+    for spec, declared, shows in zip(run.checks, run.declared, run.hazards, strict=True):
         try:
-            result.checks.append(spec.evaluate(run.sim.trace).to_dict())
+            result.checks.append({**spec.evaluate(run.sim.trace).to_dict(), "hazard": shows})
         except Exception as exc:
             text = f"{declared}check {_label(spec)}: {exc.args[0] if isinstance(exc, KeyError) else exc}"
-            result.checks.append({"name": _label(spec), "passed": False, "checked": 0, "n_violations": 0,
-                                  "violations": [], "measured": {}, "error": text})
+            result.checks.append({"name": _label(spec), "outcome": "ERROR", "passed": False, "checked": 0,
+                                  "n_violations": 0, "violations": [], "measured": {}, "error": text,
+                                  "hazard": shows})
             _first_error(result, text, "configuration" if isinstance(exc, KeyError | ConfigurationError) else "run")
     for name, (value, unit) in run.figures.items():
         try:

@@ -8,7 +8,12 @@ A scenario is a Python file (bundled ones live in :mod:`cosim.scenarios`) with
 * ``UNTIL``: default end time (a string with a unit or ticks),
 * ``def scenario(run: Run) -> None``: create plants and controllers, connect signals, declare
   checks and figures, in that order, top to bottom. It may call ``run.run_until(t)`` for
-  phases; whatever is left is run to ``UNTIL`` by the runner, then the checks are evaluated.
+  phases (never past the end: ``--until`` shorter than the phases is refused); whatever is left
+  is run to ``UNTIL`` by the runner, then the checks are evaluated. A scenario that ends on its
+  own (when its job is done) runs with ``run.run_job(done, step=...)`` and gives a safety limit as
+  ``UNTIL``; ``--until`` then stops it earlier.
+* the finding it demonstrates, if it is a hazard scenario: ``run.hazard(check, shows="...")``, a
+  check written as the healthy rule that is expected to fail (verdict ``HAZARD SHOWN``).
 
 Example (ten lines)::
 
@@ -158,6 +163,10 @@ class Run:
     checks: list[CheckSpec] = field(default_factory=list)
     #: Where each check was declared (``file:line: `` of the caller), for messages after the run.
     declared: list[str] = field(default_factory=list)
+    #: For each check, the hazard it shows when it fails (:meth:`hazard`), or None for an ordinary check.
+    hazards: list[str | None] = field(default_factory=list)
+    #: The scenario's name, for messages.
+    scenario: str = ""
     figures: dict[str, tuple[Callable[[], float] | float, str]] = field(default_factory=dict)
     plants: list[Plant] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
@@ -183,11 +192,28 @@ class Run:
         ``where`` says where it was declared, for messages after the run (default: the calling
         line of the script, ``file:line``).
         """
+        self._declare(spec, where, None)
+
+    def hazard(self, spec: CheckSpec, *, shows: str, where: str | None = None) -> None:
+        """Declare the finding the scenario exists to demonstrate: a check that is expected to fail.
+
+        ``spec`` is written as the healthy machine's rule ("the buffer never runs empty"), so that the
+        scenario's fixed twin can declare the same rule with :meth:`check` and pass. ``shows`` says in
+        one line what the hazard is. The hazard is *shown* when the check fails with violations; if it
+        passes, or examines nothing, the hazard is *missed* (verdicts ``HAZARD SHOWN`` and
+        ``HAZARD MISSED``: see :attr:`cosim.runner.Result.verdict`).
+        """
+        if not str(shows).strip():
+            raise ConfigurationError("run.hazard(shows=''): say in one line what the hazard is")
+        self._declare(spec, where, str(shows).strip())
+
+    def _declare(self, spec: CheckSpec, where: str | None, shows: str | None) -> None:
         if where is None:
-            caller = sys._getframe(1)
+            caller = sys._getframe(2)
             where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
         self.checks.append(spec)
         self.declared.append(f"{where}: ")
+        self.hazards.append(shows)
 
     def note(self, text: str) -> None:
         """Tell the user something about the run that is neither a check nor a figure (in result.json and the table).
@@ -201,8 +227,38 @@ class Run:
         self.figures[name] = (value, unit)
 
     def run_until(self, t: int) -> None:
-        """Run the simulation to tick ``t`` (for scenarios with phases)."""
-        self.sim.run(until=t)
+        """Run the simulation to tick ``t`` (for scenarios with phases).
+
+        Raises
+        ------
+        ConfigurationError
+            ``t`` is past the run's end (``--until`` shorter than the scenario's phases): the run is
+            refused rather than run past the end the user asked for.
+        """
+        if t > self.until:
+            tb = self.sim.timebase
+            raise ConfigurationError(
+                f"scenario {self.scenario or '?'}: until = {tb.seconds(self.until):g} s is not allowed "
+                f"(allowed: at least {tb.seconds(t):g} s: the scenario runs in phases to that time)")
+        if t > self.sim.now:
+            self.sim.run(until=t)
+
+    def run_job(self, done: Callable[[], bool], *, step: int, what: str = "the job") -> bool:
+        """Run in steps of ``step`` [ticks] until ``done()`` is true or the run's end; True if the job is done.
+
+        For scenarios that end on their own (their ``UNTIL`` is then a safety limit): the run ends
+        when the job is done (``until`` becomes that instant: the runner runs no further), or at
+        ``--until`` if that comes first. A job cut short by the end gets a note saying so (``what``
+        names the job in it): checks of the whole job then fail, they do not pass on part of it.
+        """
+        while not done() and self.sim.now < self.until:
+            self.sim.run(until=min(self.sim.now + step, self.until))
+        if done():
+            self.until = self.sim.now
+            return True
+        self.note(f"the run ended at {self.sim.timebase.seconds(self.sim.now):g} s (until) before {what} "
+                  "ended: checks of the whole job do not hold for the part simulated")
+        return False
 
 
 @dataclass(frozen=True)

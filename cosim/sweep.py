@@ -20,11 +20,13 @@ Runs go to a Dask cluster: a local cluster of ``workers`` processes by default, 
 scheduler when ``scheduler`` gives its address, or this process when ``workers == 0``.
 
 The table has short, stable column names: ``p.<parameter>``, ``verdict``, ``error``, ``failed``
-(the checks that failed), ``c<k>.passed`` / ``c<k>.n_violations`` / ``c<k>.<measured>`` for the
-k-th check in declaration order, ``fig.<figure>``. :func:`sweep` returns the legend (``c<k>`` to
-the check's name) in ``table.attrs["legend"]`` and, with ``out``, writes next to ``sweep.parquet``
-a ``sweep.json`` (legend, units, verdict counts) and the report ``sweep.html``
-(:mod:`cosim.sweep_report`).
+(the checks that did not come out as declared: an ordinary check that failed, examined nothing
+or could not be evaluated, a declared hazard that was missed), ``c<k>.verdict`` (``PASS``,
+``FAIL``, ``UNCHECKED``, ``ERROR``, ``HAZARD SHOWN``, ``HAZARD MISSED``) / ``c<k>.passed`` /
+``c<k>.n_violations`` / ``c<k>.<measured>`` for the k-th check in declaration order, ``fig.<figure>``.
+:func:`sweep` returns the legend (``c<k>`` to the check's name) in ``table.attrs["legend"]`` and,
+with ``out``, writes next to ``sweep.parquet`` a ``sweep.json`` (legend, units, verdict counts) and
+the report ``sweep.html`` (:mod:`cosim.sweep_report`).
 """
 
 from __future__ import annotations
@@ -189,10 +191,10 @@ def _decimal(value: Fraction) -> str:
 def run_one(scenario: str | ScenarioFile, spec: RunSpec) -> dict[str, Any]:
     """Run one sweep point and flatten its result into a row (no files written).
 
-    The checks go into ``row["_checks"]`` as ``(name, passed, n_violations, measured)``; :func:`sweep`
+    The checks go into ``row["_checks"]`` as ``(name, passed, n_violations, measured, verdict)``; :func:`sweep`
     turns them into the short ``c<k>.*`` columns and the legend.
     """
-    from cosim.runner import run_scenario
+    from cosim.runner import check_outcome, run_scenario
 
     row: dict[str, Any] = {"index": spec.index, "seed": spec.seed}
     try:
@@ -204,7 +206,7 @@ def run_one(scenario: str | ScenarioFile, spec: RunSpec) -> dict[str, Any]:
         return row
     row.update({"verdict": result.verdict, "error": result.error or "", "checks_passed": result.passed,
                 "checks_failed": result.failed})
-    row["_checks"] = [(c["name"], bool(c["passed"]), int(c["n_violations"]), dict(c["measured"]))
+    row["_checks"] = [(c["name"], bool(c["passed"]), int(c["n_violations"]), dict(c["measured"]), check_outcome(c))
                       for c in result.checks]
     row["_units"] = {name: figure["unit"] for name, figure in result.figures.items()}
     for name, figure in result.figures.items():
@@ -361,13 +363,14 @@ def _flatten(rows: list[dict[str, Any]]) -> tuple[dict[str, str], dict[str, str]
     for row in rows:
         units.update(row.pop("_units", {}))
         failed = []
-        for check_name, passed, n_violations, measured in row.pop("_checks", []):
+        for check_name, passed, n_violations, measured, verdict in row.pop("_checks", []):
             key = keys.setdefault(check_name, f"c{len(keys) + 1}")
+            row[f"{key}.verdict"] = verdict
             row[f"{key}.passed"] = passed
             row[f"{key}.n_violations"] = n_violations
             for measure, value in measured.items():
                 row[f"{key}.{measure}"] = value
-            if not passed:
+            if verdict not in ("PASS", "HAZARD SHOWN"):
                 failed.append(key)
         row["failed"] = ", ".join(failed)
     return {key: check_name for check_name, key in keys.items()}, units

@@ -4,8 +4,9 @@
 offline and can be mailed): a header with the verdict counts, the legend of the short column names
 and the reasons of the first runs that did not pass, then a grid of scatter plots, one row per
 figure (``fig.*`` columns; the number of failed checks when the scenario declares no figure), one
-column per swept parameter. PASS is green, FAIL red; ERROR runs have no figures and are counted in
-the header. Hovering a point shows the run's index, verdict and parameter values.
+column per swept parameter, one colour per verdict (:data:`VERDICT_COLOURS`: PASS green, FAIL red,
+HAZARD SHOWN orange, HAZARD MISSED purple, UNCHECKED grey-blue, ...); ERROR runs have no figures and
+are counted in the header. Hovering a point shows the run's index, verdict and parameter values.
 """
 
 from __future__ import annotations
@@ -14,7 +15,11 @@ import html
 from pathlib import Path
 from typing import Any
 
-VERDICT_COLOURS = {"PASS": "#2a9d3f", "FAIL": "#d62728", "ERROR": "#7f7f7f"}
+VERDICT_COLOURS = {"PASS": "#2a9d3f", "FAIL": "#d62728", "ERROR": "#7f7f7f", "HAZARD SHOWN": "#ff7f0e",
+                   "HAZARD MISSED": "#9467bd", "UNCHECKED": "#6b8fb3", "TERMINATED": "#8c564b",
+                   "INTERRUPTED": "#bcbd22"}
+#: Verdicts of runs that came out as the scenario declares (the others are listed with their reasons).
+EXPECTED = ("PASS", "HAZARD SHOWN")
 
 
 def write_report(table: Any, path: Path, *, scenario: str) -> Path:
@@ -104,22 +109,38 @@ def verdict_counts(table: Any) -> dict[str, int]:
 
 
 def reasons(table: Any, *, limit: int = 5) -> list[str]:
-    """Why runs did not pass: one line for each of the first ``limit`` such runs, then a count of the rest."""
+    """Why runs did not come out as declared (not PASS or HAZARD SHOWN): one line for each of the first ``limit``
+    such runs, then a count of the rest."""
     legend = table.attrs.get("legend", {})
     swept = table.attrs.get("swept", [])
-    bad = table[table["verdict"] != "PASS"] if len(table) else table
+    bad = table[~table["verdict"].isin(EXPECTED)] if len(table) else table
     lines = []
     for _, row in bad.head(limit).iterrows():
         values = ", ".join(f"{p}={row[f'p.{p}']}" for p in swept if f"p.{p}" in row)
         if row["verdict"] == "ERROR":
             why = str(row["error"]).splitlines()[0] if row["error"] else "no error message"
         else:
-            why = "; ".join(f"{key} {legend.get(key, '')} ({_violations(row[f'{key}.n_violations'])})"
-                            for key in str(row["failed"]).split(", ") if key) or "a check failed"
+            why = "; ".join(f"{key} {legend.get(key, '')} ({_why(row, key)})"
+                            for key in str(row["failed"]).split(", ") if key) or _nothing(row["verdict"])
         lines.append(f"run {int(row['index'])} ({values}): {row['verdict']}  {why}")
     if len(bad) > limit:
         lines.append(f"... and {len(bad) - limit} more (column 'verdict', 'error' and 'failed' of the table)")
     return lines
+
+
+def _why(row: Any, key: str) -> str:
+    """What came of one check of a run: its violations, or its verdict when it examined nothing or was missed."""
+    verdict = row.get(f"{key}.verdict", "FAIL")
+    if verdict == "FAIL":
+        return _violations(row[f"{key}.n_violations"])
+    return f"{verdict}: {_violations(row[f'{key}.n_violations'])}"
+
+
+def _nothing(verdict: str) -> str:
+    """The reason of a run without a failed check."""
+    if verdict == "UNCHECKED":
+        return "no check examined anything"
+    return "a plant ended the run early" if verdict == "TERMINATED" else "a check failed"
 
 
 def _violations(count: Any) -> str:

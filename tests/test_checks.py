@@ -89,14 +89,14 @@ def found(res: CheckResult) -> list[tuple[int, float, float | str]]:
 def test_result_dict_has_exactly_the_runner_fields_in_plain_json_types() -> None:
     trace = make_trace(pulses=steps(0, 1000, 1400))
     data = MinPulseSpacing(STEP, 500).evaluate(trace).to_dict()
-    assert set(data) == {"name", "passed", "checked", "n_violations", "violations", "measured", "signal",
-                         "description"}
+    assert set(data) == {"name", "outcome", "passed", "checked", "n_violations", "violations", "measured", "signal",
+                         "description", "nothing_checked"}
     assert data == {
-        "name": "MinPulseSpacing(dev.x.step)", "passed": False, "checked": 3, "n_violations": 1,
+        "name": "MinPulseSpacing(dev.x.step)", "outcome": "FAIL", "passed": False, "checked": 3, "n_violations": 1,
         "violations": [{"t_ns": 1400, "value": 400, "limit": 500,
                         "detail": "pulse 2 only 400 ns after pulse 1 at 1000 ns"}],
         "measured": {"min_spacing_ns": 400}, "signal": STEP,
-        "description": "dev.x.step: pulses at least 500 ns apart",
+        "description": "dev.x.step: pulses at least 500 ns apart", "nothing_checked": "",
     }
     assert json.loads(json.dumps(data)) == data  # plain ints, no numpy scalars
     assert all(type(v) is int for v in (data["checked"], data["violations"][0]["t_ns"], data["violations"][0]["value"]))
@@ -146,23 +146,26 @@ def _empty_trace() -> Trace:
 
 
 @pytest.mark.parametrize(("make", "signal"), EMPTY_CASES)
-def test_a_check_that_examined_nothing_fails(make: Callable[[], Check], signal: str) -> None:
+def test_a_check_that_examined_nothing_neither_passes_nor_fails(make: Callable[[], Check], signal: str) -> None:
     res = make().evaluate(_empty_trace())
-    assert not res.passed and res.checked == 0 and res.n_violations == 1
-    assert res.violations[0].detail == f"signal {signal} had no data: nothing was checked"
+    assert (res.outcome, res.passed, res.checked, res.n_violations, res.violations) == ("UNCHECKED", False, 0, 0, ())
+    assert res.nothing_checked == f"signal {signal} had no data: nothing was checked"
+    assert res.summary() == f"UNCHECKED {res.name}: 0 checked (signal {signal} had no data: nothing was checked)"
 
 
 @pytest.mark.parametrize(("make", "signal"), EMPTY_CASES)
 def test_allow_empty_accepts_an_empty_signal(make: Callable[[], Check], signal: str) -> None:
     res = dataclasses.replace(make(), allow_empty=True).evaluate(_empty_trace())
-    assert res.passed and res.checked == 0 and res.violations == ()
+    assert res.passed and res.outcome == "PASS" and res.checked == 0 and res.violations == ()
+    assert res.nothing_checked == ""
+    assert res.summary() == f"PASS {res.name}: 0 checked (nothing to examine; allowed for this check)"
 
 
-def test_duration_without_a_start_event_fails_saying_so() -> None:
+def test_duration_without_a_start_event_is_unchecked_saying_so() -> None:
     trace = make_trace(signals={"dev.limit": ("bit", [(0, 0)])}, pulses=steps(100))
     res = Duration(EdgeRef("dev.limit", 1), PulseRef(STEP, "last"), max=500).evaluate(trace)
-    assert not res.passed and res.checked == 0
-    assert res.violations[0].detail == "no change of dev.limit to 1 in the trace: nothing was measured"
+    assert res.outcome == "UNCHECKED" and not res.passed and res.checked == 0 and res.violations == ()
+    assert res.nothing_checked == "no change of dev.limit to 1 in the trace: nothing was measured"
 
 
 def test_unknown_signal_names_it_the_check_and_close_names() -> None:

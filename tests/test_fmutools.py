@@ -76,7 +76,7 @@ def test_run_fmu_gives_the_outputs_of_fmpys_simulate_fmu(model: str, version: in
     code = main(["run-fmu", str(path), "--until", f"{stop} s", "--step", f"{step} s", "--out", str(tmp_path),
                  *[arg for name, value in sets.items() for arg in ("--set", f"{name}={value}")]])
     assert code == 0
-    assert json.loads((tmp_path / "result.json").read_text())["verdict"] == "PASS"
+    assert json.loads((tmp_path / "result.json").read_text())["verdict"] == "UNCHECKED"  # no checks, exit 0
     trace = read_trace(tmp_path)
     starts = {name: 3 if value == "fast" else value for name, value in sets.items()}
     spec = fmudesc.load_spec(SOURCE_DIR / model)

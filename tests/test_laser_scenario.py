@@ -23,7 +23,8 @@ def run(tmp_path: Path, *args: str) -> tuple[int, dict]:
 def test_runs_and_writes_json_vcd_and_tables(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     status, result = run(tmp_path)
     assert status == 0
-    assert result["verdict"] == "PASS" and result["summary"] == {"checks": 3, "passed": 3, "failed": 0}
+    assert result["verdict"] == "PASS" and result["summary"] == {"checks": 3, "passed": 3, "failed": 0, "unchecked": 0,
+                                                             "hazards": 0, "hazards_shown": 0}
     assert "PASS  energy equals the closed form (1e-9 relative)" in capsys.readouterr().out
     assert {p.name for p in (tmp_path / "out").iterdir()} >= {"result.json", "trace.vcd", "trace_digital.vcd",
                                                               "trace.gtkw", "edges.parquet", "values.parquet"}

@@ -48,9 +48,10 @@ def _script(tmp_path: Path, text: str, name: str = "blink.py") -> Path:
 
 def test_a_second_run_replaces_the_first_completely(tmp_path: Path) -> None:
     script, out = _script(tmp_path, BLINK), tmp_path / "out"
-    assert main(["run", str(script), "--out", str(out)]) == 0
+    assert main(["run", str(script), "--out", str(out), "--allow-unchecked"]) == 0
     assert (out / "edges.parquet").is_file() and (out / MARK).is_file()
-    assert main(["run", str(script), "--out", str(out), "--format", "csv", "--set", "period_us=200"]) == 0
+    assert main(["run", str(script), "--out", str(out), "--format", "csv", "--set", "period_us=200",
+                 "--allow-unchecked"]) == 0
     assert not list(out.glob("*.parquet"))  # not a single file of the first run survives
     t, _v = read_trace(out).edges("blink.gate")
     assert t.tolist()[:3] == [0, 200_000, 400_000]  # the second run's edges (every 200 us), from its own tables
@@ -144,6 +145,6 @@ def test_long_sampled_runs_report_progress_although_they_run_without_kernel_even
 
 
 def test_the_staging_folder_is_not_left_behind(tmp_path: Path) -> None:
-    assert main(["run", str(_script(tmp_path, BLINK)), "--out", str(tmp_path / "out")]) == 0
+    assert main(["run", str(_script(tmp_path, BLINK)), "--out", str(tmp_path / "out"), "--allow-unchecked"]) == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "scripts"]
     assert os.listdir(tmp_path / "out").count(MARK) == 1

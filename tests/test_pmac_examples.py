@@ -10,6 +10,8 @@ Web: 200,000 counts/m at 1.28 m/s = 256 counts/ms; marks at 0.0200071 m + k * 0.
 
 from __future__ import annotations
 
+import json
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -35,10 +37,18 @@ def test_the_manual_triggered_move_starts_at_the_captured_mark_position(tmp_path
 
 def test_without_the_dummy_read_a_light_load_starts_from_the_stale_capture(capsys: pytest.CaptureFixture[str],
                                                                           tmp_path: Path) -> None:
-    assert main(["run", str(SHEAR / "shear_stale.toml"), "--out", str(tmp_path / "o")]) == 0
+    assert main(["run", str(SHEAR / "shear_stale.toml"), "--out", str(tmp_path / "o")]) == 0  # HAZARD SHOWN: 0
     out = capsys.readouterr().out
-    assert "PASS  stale-capture hazard reproduced: time zero is mark 1 (4001.42 counts), not mark 2" in out
+    assert "scenario pmac_flying_shear_stale: HAZARD SHOWN  (2/2 hazards shown, " in out
+    assert "HAZARD SHOWN  time zero = the web's position at mark 2 (1/256 count)  [1 checked, 1 violations]" in out
+    assert "HAZARD SHOWN  no triggered start from a stale capture  [" in out
+    assert "hazard: no dummy read after the freeze: time zero is the stale capture of mark 1 (4001.42 counts)" in out
+    assert "at t=120000000 ns: value 4001.41796875 vs limit 14001.4" in out  # mark 1 (1/256 count), not mark 2
     assert "figure stale_starts = 1" in out
+    result = json.loads((tmp_path / "o" / "result.json").read_text())
+    assert result["verdict"] == "HAZARD SHOWN" and [h["shown"] for h in result["hazards"]] == [True, True]
+    healthy = {t["name"] for t in tomllib.loads((SHEAR / "shear.toml").read_text())["check"]}
+    assert {h["check"] for h in result["hazards"]} <= healthy  # shear.toml's own rules, which pass there
 
 
 @pytest.mark.parametrize("machine", ["shear.toml", "shear_stale.toml"])

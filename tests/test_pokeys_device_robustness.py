@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import queue
 import socket
@@ -51,6 +52,15 @@ def test_a_port_in_use_is_a_clear_error_not_a_traceback(tmp_path: Path, capsys: 
                        "--out", str(tmp_path / "out")])
     assert status == 2
     assert f"cannot serve on 127.0.0.1:{port}" in capsys.readouterr().err
+
+
+def test_a_device_no_client_drove_is_unchecked_not_passed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """No client: no axis emits a pulse, the nine pulse checks examine nothing: UNCHECKED, exit 4 (0 if allowed)."""
+    args = ["pokeys-device", "--port", "0", "--duration", "0.1", "--rt-priority", "0", "--no-vcd"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 4
+    assert "verdict: UNCHECKED (no axis emitted a pulse: nothing was checked)" in capsys.readouterr().out
+    assert json.loads((tmp_path / "a" / "device.json").read_text())["verdict"] == "UNCHECKED"
+    assert main([*args, "--out", str(tmp_path / "b"), "--allow-unchecked"]) == 0
 
 
 def test_repeated_trouble_is_counted_and_reported_once_per_interval(caplog: pytest.LogCaptureFixture) -> None:

@@ -98,7 +98,7 @@ def test_buffered_job_final_positions_equal_the_pulses_sent(model: str, transpor
         assert (client.stale_replies, client.bad_replies, client.resends) == (0, 0, 0)
     summary = rig.finish()
     assert tuple(summary["pulses"]) == tuple(summary["positions"]) == expected
-    assert summary["passed"], summary["checks"]
+    assert summary["passed"] and summary["verdict"] == "PASS", summary["checks"]
     assert summary["packets"].keys() <= {"request", "tcp_connection"}
 
 

@@ -130,7 +130,7 @@ def test_a_refused_fill_is_in_the_device_summary_and_fails_its_checks() -> None:
     rig.sim.run(until=10 * MS)
     summary = rig.finish()
     refused = [c for c in rig.results if c.name.startswith("no fill refused")]
-    assert len(refused) == 1 and not refused[0].passed and not summary["passed"]
+    assert len(refused) == 1 and not refused[0].passed and not summary["passed"] and summary["verdict"] == "FAIL"
     assert [r.passed for r in rig.results if not r.name.startswith("no fill refused")] == [True] * 9
     assert [(r["axis"], r["count"], r["limit"]) for r in summary["refusals"]] == [("z", -26, 25)]
 

@@ -1,4 +1,5 @@
-"""Bundled PoKeys scenarios: each passes its checks, and the figures show what the scenario is about."""
+"""Bundled PoKeys scenarios: each passes its checks (a hazard scenario shows its hazard), and the figures show
+what the scenario is about."""
 
 from __future__ import annotations
 
@@ -51,13 +52,17 @@ def test_job_drives_three_stepper_fmus_whose_commanded_steps_equal_the_counters(
 
 def test_stall_underrun_is_reported_with_start_and_length_and_prefill_avoids_it() -> None:
     stalled = run("pokeys_stall")
-    assert stalled.verdict == "PASS", stalled.table()
+    assert stalled.verdict == "HAZARD SHOWN", stalled.table()
+    assert stalled.hazards == [{"check": "no buffer underrun", "shown": True, "shows": "a 60 ms host stall with "
+                                "20 slots queued: the buffer runs empty and the axis stops dead mid-move"}]
     assert figure(stalled, "underruns") == 1
     start, length = figure(stalled, "underrun_start_ms"), figure(stalled, "underrun_length_ms")
     assert 315 <= start <= 321 and 40 <= length <= 44  # 20 slots after the stall starts; the stall + link delay
-    assert stalled.checks[0]["measured"]["max_ns"] == length * MS
+    underrun = stalled.checks[0]["violations"][0]  # the violated rule names the underrun's start and length
+    assert (underrun["t_ns"], underrun["value"]) == (start * MS, length * MS)
     prefilled = run("pokeys_stall_prefill")
     assert prefilled.verdict == "PASS", prefilled.table()
+    assert prefilled.checks[0]["name"] == stalled.checks[0]["name"] == "no buffer underrun"  # the same rule
     assert figure(prefilled, "underruns") == 0 and figure(prefilled, "lowest_buffer_level_during_job") > 30
 
 
@@ -93,16 +98,28 @@ def test_internal_move_is_a_slot_trapezoid_through_the_buffer() -> None:
 
 def test_jogging_runs_past_an_enabled_limit() -> None:
     result = run("pokeys_jog_limit")
-    assert result.verdict == "PASS", result.table()
-    assert figure(result, "travel_past_limit") > 2_000
+    assert result.verdict == "HAZARD SHOWN", result.table()
+    assert [(h["check"], h["shown"]) for h in result.hazards] == [
+        ("no pulse after the slot boundary at which the trip is seen", True),
+        ("engine stopped by the limit switch", True)]
+    assert [c["name"] for c in run("pokeys_limit").checks if c["name"] in {h["check"] for h in result.hazards}] == [
+        h["check"] for h in result.hazards]  # pokeys_limit's own rules, which pass there
+    # jogging at 10 kHz from 0: the limit trips at pulse 2000 (200 ms), pulses go on until the jog stops at 500 ms
+    assert result.checks[1]["violations"][0]["value"] == 10  # state 10 (jogging) at the end, not 100
+    assert figure(result, "travel_past_limit") == 3_000
 
 
 @pytest.mark.parametrize(("name", "fix", "error"), [
     ("pokeys_stale_slots", "none", 100), ("pokeys_stale_slots_fix", "clear", 0), ("pokeys_stale_slots_fix", "wait", 0)])
 def test_internal_to_buffer_hazard_and_its_fixes(name: str, fix: str, error: int) -> None:
     result = run(name, fix=fix)
-    assert result.verdict == "PASS", result.table()
+    assert result.verdict == ("HAZARD SHOWN" if error else "PASS"), result.table()
     assert figure(result, "final_error") == error
+    assert result.checks[0]["name"] == f"x ends at the planned position {int(figure(result, 'planned_position'))}"
+
+
+def test_the_stale_slots_hazard_is_missed_when_the_host_clears_the_buffer() -> None:
+    assert run("pokeys_stale_slots", fix="clear").verdict == "HAZARD MISSED"
 
 
 POKEYS_SCENARIOS = ("pokeys_job", "pokeys_stall", "pokeys_stall_prefill", "pokeys_limit", "pokeys_emergency",

@@ -98,7 +98,9 @@ def test_run_passes_and_writes_results(tmp_path: Path) -> None:
     assert result.verdict == "PASS"
     data = json.loads((tmp_path / "out" / "result.json").read_text())
     assert data["parameters"] == {"on_us": 100, "n": 3, "limit_us": 150}
-    assert data["summary"] == {"checks": 1, "passed": 1, "failed": 0}
+    assert data["summary"] == {"checks": 1, "passed": 1, "failed": 0, "unchecked": 0, "hazards": 0,
+                               "hazards_shown": 0}
+    assert data["hazards"] == [] and data["checks"][0]["verdict"] == "PASS" and data["checks"][0]["hazard"] is None
     assert data["checks"][0]["measured"] == {"max_high_ns": 100_000}
     assert (tmp_path / "out" / "trace.vcd").exists() and (tmp_path / "out" / "edges.parquet").exists()
 

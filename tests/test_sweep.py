@@ -56,7 +56,7 @@ def test_random_integers_stay_in_range_and_bad_names_are_refused(script: str) ->
 
 def test_a_broken_run_is_a_row_with_its_error(script: str) -> None:
     table = sweep(script, plan(script, grid={"x": [1, 2, 3]}), workers=0, progress=False)
-    assert table["verdict"].tolist() == ["PASS", "ERROR", "PASS"]
+    assert table["verdict"].tolist() == ["UNCHECKED", "ERROR", "UNCHECKED"]  # FLAKY declares no checks
     assert "x must not be 2" in table.loc[1, "error"]
     assert table["fig.twice_y"].tolist()[::2] == [1.0, 1.0]
 
@@ -182,3 +182,15 @@ def test_a_float_millisecond_parameter_sweeps_without_errors(tmp_path: Path,
     assert len(table) == 6 and set(table["verdict"]) == {"PASS"}
     assert len(set(table["p.gate_ms"])) == 6
     assert "6 runs in" in out and "6 PASS" in out
+
+
+def test_hazard_runs_have_their_verdicts_per_check_and_only_a_missed_hazard_is_a_reason(tmp_path: Path) -> None:
+    from cosim.sweep_report import reasons
+
+    path = tmp_path / "hazard.py"
+    path.write_text(TIMED.replace("run.check(AtMost(run.p.x, 2))", "run.hazard(AtMost(run.p.x, 2), shows='x > 2')"))
+    table = sweep(str(path), plan(str(path), grid={"x": [1, 3]}), workers=0, progress=False)
+    assert table["verdict"].tolist() == table["c1.verdict"].tolist() == ["HAZARD MISSED", "HAZARD SHOWN"]
+    assert table["failed"].tolist() == ["c1", ""]
+    assert reasons(table) == ["run 0 (x=1): HAZARD MISSED  c1 x at most 2 (a deliberately long check name) "
+                              "(HAZARD MISSED: 0 violations)"]

@@ -95,7 +95,7 @@ def test_the_note_program_with_other_units_table_and_targets_runs_from_its_text_
     (tmp_path / "unused.bas").write_text("WA(1)\n")
     out = tmp_path / "out"
     assert main(["run", str(tmp_path / "variant.bas"), "--machine", str(tmp_path / "note.toml"),
-                 "--out", str(out)]) == 0
+                 "--out", str(out), "--allow-unchecked"]) == 0  # no checks in note.toml: this test checks the trace
     trace = read_trace(out)
 
     def steps(length: int) -> list[int]:

@@ -16,6 +16,9 @@ def test_note_example_passes_with_every_edge_at_its_count() -> None:
     """trio_example: 2 passes, 16 gate edges at 1761 1841 3121 3521 | 3519 3119 1839 1759 (x2)."""
     result = run("trio_example", laser=False, passes=2)
     assert result.verdict == "PASS", result.table()
+    # it ends when the passes are done, not at UNTIL (a safety limit): the run's end is the job's end
+    assert result.simulated_s == result.figures["job_s"]["value"] and result.until == round(result.simulated_s * 1e9)
+    assert 0.1 < result.simulated_s < 600
     assert result.checks[0]["checked"] == 16
     assert result.figures["late_positions"]["value"] == 0
     assert result.figures["step_pulses"]["value"] == 4 * 4800
@@ -38,10 +41,15 @@ def test_raster_with_a_slow_refill_names_the_positions_passed_before_loading() -
     assert first["detail"] == f"gate position {first['value']:g} units was passed before it was loaded; it fired " \
                               "at the load"
     starved = run("trio_raster_starved", laser=False, lines=1, positions=800)
-    assert starved.verdict == "PASS", starved.table()
+    assert starved.verdict == "HAZARD SHOWN", starved.table()
+    assert starved.hazards == [{"check": "no position is passed before it is loaded", "shown": True, "shows":
+                                "a host refilling 64 positions every 40 ms starves the gating FIFO at 200 mm/s: "
+                                "positions are passed before they are loaded and fire late"}]
+    assert starved.checks[0]["name"] == late["name"]  # trio_raster's rule, which passes there
     assert starved.checks[0]["measured"]["late_positions"] == late["measured"]["late_positions"]
     assert starved.checks[0]["description"].startswith(
-        f"positions passed before they were loaded [units]: {first['value']:g}, ")
+        "every gate position is loaded before the axis reaches it; passed before they were loaded [units]: "
+        f"{first['value']:g}, ")
 
 
 @pytest.mark.parametrize(("link", "more_at_corners"), [(True, False), (False, True)])

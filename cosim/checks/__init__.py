@@ -5,8 +5,9 @@ runner calls ``spec.evaluate(sim.trace)`` after the run, which returns a :class:
 Checks read the trace and nothing else. Parameters are integer ticks of the trace's time base
 (1 ns by default: use ``sim.ticks("25 us")``); results report instants and durations in ns.
 
-A check that examined nothing fails (``allow_empty=True`` to accept that): a pass means
-everything was checked. See ``docs/checks.md`` for every check, its parameters and its report.
+A check that examined nothing neither passes nor fails: its outcome is ``UNCHECKED``
+(``allow_empty=True`` where examining nothing is fine); a pass means something was checked.
+See ``docs/checks.md`` for every check, its parameters and its report.
 
 Examples
 --------

@@ -1,4 +1,4 @@
-"""What every check shares: naming, the empty-signal rule, reading signals (parameters: :mod:`cosim.validate`).
+"""What every check shares: naming, the examined-nothing rule, reading signals (parameters: :mod:`cosim.validate`).
 
 A check is a frozen dataclass whose :meth:`Check.evaluate` reads a :class:`~cosim.trace.Trace`
 and nothing else. Parameters are integer ticks of the trace's time base; results report instants
@@ -77,8 +77,10 @@ class Check:
     name : str, optional
         Name in reports; default ``Type(signal)``.
     allow_empty : bool
-        Pass when there was nothing to check. By default a check that examined nothing fails:
-        a pass must mean everything was checked.
+        Pass when there was nothing to check (for a check where that is fine, e.g. an axis the
+        job may not move). By default a check that examined nothing neither passes nor fails: its
+        outcome is ``UNCHECKED``, with the reason in ``nothing_checked``; a pass must mean
+        something was checked.
     """
 
     name: str | None = field(default=None, kw_only=True)
@@ -109,14 +111,13 @@ class Check:
         except KeyError as exc:
             raise KeyError(f"{self.label}: {exc.args[0] if exc.args else exc}") from None
         violations = sorted(found.violations, key=lambda v: v.t_ns)
-        n_violations = found.n_violations
-        if found.checked == 0 and not self.allow_empty:
-            detail = found.empty_detail or f"signal {found.signal} had no data: nothing was checked"
-            violations, n_violations = [Violation(0, 0, ">= 1 item checked", detail)], 1
+        nothing = ""
+        if found.checked == 0 and found.n_violations == 0 and not self.allow_empty:
+            nothing = found.empty_detail or f"signal {found.signal} had no data: nothing was checked"
         return CheckResult(
-            name=self.label, passed=n_violations == 0, checked=found.checked, n_violations=n_violations,
-            violations=tuple(violations), measured=dict(found.measured), signal=found.signal,
-            description=found.description,
+            name=self.label, passed=found.n_violations == 0 and not nothing, checked=found.checked,
+            n_violations=found.n_violations, violations=tuple(violations), measured=dict(found.measured),
+            signal=found.signal, description=found.description, nothing_checked=nothing,
         )
 
     def examine(self, trace: Trace, clock: Clock) -> Findings:

@@ -2,9 +2,15 @@
 
 The runner stores :meth:`CheckResult.to_dict` in ``result.json``; its shape is fixed::
 
-    {"name": str, "passed": bool, "checked": int, "n_violations": int,
+    {"name": str, "outcome": "PASS" | "FAIL" | "UNCHECKED", "passed": bool, "checked": int,
+     "n_violations": int,
      "violations": [{"t_ns": int, "value": number, "limit": number | str, "detail": str}, ...],
-     "measured": {figure: number, ...}, "signal": str, "description": str}
+     "measured": {figure: number, ...}, "signal": str, "description": str, "nothing_checked": str}
+
+The outcome: ``FAIL`` when there was a violation, else ``UNCHECKED`` when the check examined
+nothing (``checked == 0``) and was not told that this is fine (``allow_empty``), else ``PASS``.
+An ``UNCHECKED`` check neither passed nor failed (``passed`` is false, ``n_violations`` 0);
+``nothing_checked`` says why (e.g. ``signal pokeys.x.step had no data: nothing was checked``).
 
 ``violations`` holds the first :data:`MAX_REPORTED` violations in time order; ``n_violations``
 counts all of them.
@@ -71,7 +77,7 @@ class CheckResult:
     name : str
         Name of the check (given by the user or made from its type and signal).
     passed : bool
-        True when everything was checked and nothing broke the rule.
+        True when something was checked (or ``allow_empty``) and nothing broke the rule.
     checked : int
         How many items were examined (pulses, edges, samples, intervals...).
     n_violations : int
@@ -84,6 +90,9 @@ class CheckResult:
         The main signal the check reads.
     description : str
         The rule in one line.
+    nothing_checked : str
+        Why the check examined nothing, when it did and that is not fine for it (outcome
+        ``UNCHECKED``); empty otherwise.
     """
 
     name: str
@@ -94,11 +103,20 @@ class CheckResult:
     measured: Mapping[str, Number] = field(default_factory=dict)
     signal: str = ""
     description: str = ""
+    nothing_checked: str = ""
+
+    @property
+    def outcome(self) -> str:
+        """``PASS``, ``FAIL`` (a violation) or ``UNCHECKED`` (examined nothing, and that is not fine here)."""
+        if self.n_violations:
+            return "FAIL"
+        return "UNCHECKED" if self.nothing_checked else "PASS"
 
     def to_dict(self) -> dict[str, Any]:
         """The result as the runner stores it in ``result.json``."""
         return {
             "name": self.name,
+            "outcome": self.outcome,
             "passed": bool(self.passed),
             "checked": int(self.checked),
             "n_violations": int(self.n_violations),
@@ -106,6 +124,7 @@ class CheckResult:
             "measured": {k: plain(v) for k, v in self.measured.items()},
             "signal": self.signal,
             "description": self.description,
+            "nothing_checked": self.nothing_checked,
         }
 
     def summary(self) -> str:
@@ -115,8 +134,14 @@ class CheckResult:
         --------
         >>> CheckResult("spacing", False, 3, 1, (Violation(1200, 200, 500, "too close"),)).summary()
         'FAIL spacing: 3 checked, 1 violation; first at t=1200 ns: 200 vs limit 500 (too close)'
+        >>> CheckResult("spacing", False, 0, 0, nothing_checked="no pulses").summary()
+        'UNCHECKED spacing: 0 checked (no pulses)'
         """
-        verdict = "PASS" if self.passed else "FAIL"
+        if self.outcome == "UNCHECKED":
+            return f"UNCHECKED {self.name}: 0 checked ({self.nothing_checked})"
+        if self.checked == 0 and not self.n_violations:  # allow_empty: a pass, but say that nothing was examined
+            return f"PASS {self.name}: 0 checked (nothing to examine; allowed for this check)"
+        verdict = self.outcome
         plural = "" if self.n_violations == 1 else "s"
         line = f"{verdict} {self.name}: {self.checked} checked, {self.n_violations} violation{plural}"
         if self.violations:

@@ -49,7 +49,13 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
     for table in document.tables("stimulus"):
         _stimulus(run, controller, table)
     for table in document.tables("check"):
-        run.check(check_from_table(table), where=f"{table.file}: {table.path}")
+        shows = table.text("hazard", None)  # a declared hazard: the check is expected to fail
+        check, where = check_from_table(table), f"{table.file}: {table.path}"
+        if shows is None:
+            run.check(check, where=where)
+        else:
+            with table.at("hazard"):
+                run.hazard(check, shows=shows, where=where)
     trace = run.sim.trace
     for table in document.tables("figure"):
         name, value, unit = figure_from_table(table, plants)

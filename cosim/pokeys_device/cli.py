@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from cosim.kernel import Simulation
     from cosim.pokeys_device.server import DeviceServer
 
-EXIT_PASS, EXIT_FAIL = 0, 1
+EXIT_PASS, EXIT_FAIL, EXIT_UNCHECKED = 0, 1, 4
 _SWITCH = re.compile(r"^\s*([a-z])\s*([+-]?)\s*=\s*([+-]?\d+)\s*$")
 
 
@@ -58,6 +58,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParse
     parser.add_argument("--seed", type=int, default=0, help="random seed of the simulation (default 0)")
     parser.add_argument("--out", type=Path, default=Path("results/pokeys-device"),
                         help="results folder (default results/pokeys-device)")
+    parser.add_argument("--allow-unchecked", action="store_true",
+                        help="exit 0, not 4, when no pulse was emitted (verdict UNCHECKED: nothing was checked)")
     parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
                         help="format of the trace tables (default parquet)")
     parser.add_argument("--no-vcd", action="store_true", help="do not write trace.vcd")
@@ -138,7 +140,8 @@ def check_options(args: argparse.Namespace) -> None:
 
 
 def cmd_pokeys_device(args: argparse.Namespace) -> int:
-    """Run the server until stopped; print the report; exit 0 if every check passed, else 1."""
+    """Run the server until stopped; print the report; exit by the verdict: 0 PASS, 1 FAIL, 4 UNCHECKED (no
+    pulse was emitted, so the checks examined nothing; 0 with ``--allow-unchecked``)."""
     from cosim.pokeys_device.identity import DeviceIdentity
     from cosim.pokeys_device.logs import background_stderr
     from cosim.pokeys_device.rig import VirtualPoKeys
@@ -173,8 +176,12 @@ def cmd_pokeys_device(args: argparse.Namespace) -> int:
     print(f"positions {summary['positions']}, pulses {summary['pulses']}")
     for line in summary["checks"]:
         print(f"  {line}")
+    verdict = summary["verdict"]
+    print(f"verdict: {verdict}" + (" (no axis emitted a pulse: nothing was checked)" if verdict == "UNCHECKED" else ""))
     print(f"results in {args.out}/ (device.json, {'trace.vcd, ' if not args.no_vcd else ''}{args.format} tables)")
-    return EXIT_PASS if summary["passed"] else EXIT_FAIL
+    if verdict == "UNCHECKED":
+        return EXIT_PASS if args.allow_unchecked else EXIT_UNCHECKED
+    return EXIT_PASS if verdict == "PASS" else EXIT_FAIL
 
 
 def main(argv: list[str] | None = None) -> int:

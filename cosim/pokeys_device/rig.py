@@ -122,7 +122,16 @@ class VirtualPoKeys:
             "pulses": [train.position for train in self.engine.steps],
             "checks": [r.summary() for r in self.results],
             "passed": all(r.passed for r in self.results),
+            "verdict": self.verdict(),
         }
+
+    def verdict(self) -> str:
+        """``FAIL`` (a check failed), ``UNCHECKED`` (no axis emitted a pulse: the pulse checks examined
+        nothing, e.g. no client drove the device) or ``PASS``."""
+        if not all(r.passed for r in self.results):
+            return "FAIL"
+        pulse_checks = [r for r in self.results if r.signal.endswith(".step")]
+        return "UNCHECKED" if all(r.checked == 0 for r in pulse_checks) else "PASS"
 
     def _ns(self, ticks: int) -> int:
         """``ticks`` in nanoseconds (the device's simulation runs at 1 ns, or any whole-ns resolution)."""

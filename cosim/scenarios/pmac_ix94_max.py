@@ -20,6 +20,7 @@ from cosim.checks import Bound, IntervalsAbove
 from cosim.controllers.pmac import IX94_MAX, LinearMove, scale_factor_for
 from cosim.plants.analytic import IdealConveyor
 from cosim.scenario import Param, Run
+from cosim.scenarios.pmac_ix94_slip import no_slip
 
 PARAMETERS = (
     Param("accel_ms", 5, "ms", (1, 50), "master acceleration time from rest to rtif"),
@@ -36,7 +37,7 @@ def scenario(run: Run) -> None:
     rig.cs.run_program([LinearMove(10**7, rtif * 1000, 10)])
     rig.pmac.start()
 
-    run.check(Bound("pmac.cs1.slip", lower=0, upper=0, name="no slip"))
+    run.check(no_slip())
     run.check(IntervalsAbove("pmac.cs1.ix94_active", 0.5, name="Ix94 limit never acts"))
     run.check(Bound("pmac.motor1.sync_error", lower=0, upper=0, name="slave command = master-derived position"))
     run.figure("slip_counts", lambda: float(rig.cs.slip_counts or 0), "counts")

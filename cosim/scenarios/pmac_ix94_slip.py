@@ -8,10 +8,12 @@ within a few servo cycles, but the actual time base may only rise by Ix94 per se
     Ix94 active  _|‾‾‾|__________________      the cycles the limit acted
     slip         0 ↗ constant (master counts never made up)
 
-The slave is ideal (act = cmd), so the sync error is the slip in slave counts. Checks: the slip
-at the end matches the area between the two ramps (within slip_tol), and the limit acts in one
-stretch of about (I10 - first source value) / Ix94 cycles. With an Ix94 larger than the source's
-change per cycle the expected slip is 0 and the limit must never act. Compare ``pmac_ix94_max``.
+The slave is ideal (act = cmd), so the sync error is the slip in slave counts. The hazard: the
+healthy rule of ``pmac_ix94_max``, "no slip", fails (verdict HAZARD SHOWN). Checks of the model:
+the slip at the end matches the area between the two ramps (within slip_tol), and the limit acts
+in one stretch of about (I10 - first source value) / Ix94 cycles. With an Ix94 larger than the
+source's change per cycle the expected slip is 0, the limit must never act, and the hazard is
+missed. Compare ``pmac_ix94_max``.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from __future__ import annotations
 from fractions import Fraction
 
 from cosim import rigs
-from cosim.checks import Duration, EdgeRef, IntervalsAbove, ValueAt
+from cosim.checks import Bound, Duration, EdgeRef, IntervalsAbove, ValueAt
 from cosim.controllers.pmac import LinearMove, scale_factor_for
 from cosim.plants.analytic import IdealConveyor
 from cosim.scenario import Param, Run
@@ -48,6 +50,8 @@ def scenario(run: Run) -> None:
     ramp_cycles = Fraction(accel_ticks) / clock.period_ticks
     # master counts: the area between the Ix94 ramp and the source's ramp (none if Ix94 keeps up)
     estimate = max(Fraction(0), Fraction(i10, 2) * (Fraction(i10, p.ix94) - ramp_cycles) / (64 * sf))
+    run.hazard(no_slip(), shows=f"Ix94 = {p.ix94} is too low for a {p.accel_ms} ms master acceleration: the time "
+                                "base lags and the slave slips master counts that are never made up")
     run.check(ValueAt("pmac.cs1.slip", None, float(estimate), tol=max(1.0, float(p.slip_tol * estimate)),
                       name="slip reported: the area between the source and Ix94 ramps"))
     if estimate > 0:
@@ -69,3 +73,8 @@ def scenario(run: Run) -> None:
     run.figure("first_limit_cycle", lambda: first_last()[0])
     run.figure("last_limit_cycle", lambda: first_last()[1])
     run.figure("slave_lag_counts", lambda: float(rig.cs.ideal_position("X") - rig.cs.position("X")), "counts")
+
+
+def no_slip() -> Bound:
+    """The healthy rule (shared with ``pmac_ix94_max``): the time base never slips."""
+    return Bound("pmac.cs1.slip", lower=0, upper=0, name="no slip")

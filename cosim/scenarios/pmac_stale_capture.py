@@ -11,17 +11,18 @@ frozen and nothing resets the trigger logic. The armed entry sees the old flag a
     freeze/arm                        ^^
     method     $A ‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾|$A (stale start, ~680 counts before mark 2)
 
-The checks assert that the hazard is reproduced: time zero is mark 1 and the entry runs before
-mark 2. With ``--set dummy_read=true`` the program reads X:$07800B after freezing (the manual's
-fix), the start is correct and both checks FAIL; ``pmac_stale_capture_fix`` is that run with
-checks for the correct start.
+The hazard: two rules of a correct start (those of ``pmac_stale_capture_fix``) fail: time zero is
+the master position at mark 2, and the entry is still armed just before mark 2 (verdict HAZARD
+SHOWN: time zero is mark 1, the entry runs before mark 2). With ``--set dummy_read=true`` the
+program reads X:$07800B after freezing (the manual's fix), the start is correct and the hazard is
+missed; ``pmac_stale_capture_fix`` is that run, where the same rules pass.
 """
 
 from __future__ import annotations
 
 from cosim import rigs
 from cosim.checks import ValueAt
-from cosim.controllers.pmac import RUNNING, TriggeredTimeBaseEntry
+from cosim.controllers.pmac import ARMED, TriggeredTimeBaseEntry
 from cosim.plants.analytic import IdealConveyor
 from cosim.rigs import Rig
 from cosim.scenario import Param, Run
@@ -52,9 +53,9 @@ def stale_capture_run(run: Run, *, dummy_read: bool) -> tuple[IdealConveyor, Rig
 
 def scenario(run: Run) -> None:
     belt, rig, t_mark2 = stale_capture_run(run, dummy_read=run.p.dummy_read)
-    run.check(ValueAt("pmac.ect.time_zero_pos", None, 500, tol=1 / 256,
-                      name="hazard reproduced: time zero is the stale capture of mark 1"))
-    run.check(ValueAt("pmac.ect.method", t_mark2 - 1, RUNNING, name="hazard reproduced: running before mark 2"))
+    at_mark2, armed = correct_start(belt, t_mark2)
+    run.hazard(at_mark2, shows="freeze and arm in one servo interval: the stale capture of mark 1 becomes time zero")
+    run.hazard(armed, shows="the stale capture starts motion at once, before mark 2")
 
     def early() -> float:
         starts = rig.entry.starts
@@ -62,3 +63,11 @@ def scenario(run: Run) -> None:
 
     run.figure("master_at_start_minus_mark2_counts", early, "counts")
     run.figure("saturated_cycles", lambda: len(rig.entry.saturated_cycles))
+
+
+def correct_start(belt: IdealConveyor, t_mark2: int) -> tuple[ValueAt, ValueAt]:
+    """Two rules of a correct triggered start (shared with ``pmac_stale_capture_fix``): time zero is the
+    master position at mark 2 (1/256 count), and the entry is still armed just before mark 2."""
+    return (ValueAt("pmac.ect.time_zero_pos", None, float(belt.position(t_mark2)), tol=1 / 256,
+                    name="time zero = master position at mark 2 (1/256 count)"),
+            ValueAt("pmac.ect.method", t_mark2 - 1, ARMED, name="still armed just before mark 2"))

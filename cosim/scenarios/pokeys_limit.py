@@ -14,7 +14,7 @@ distance past the switch [pulses] and the stop time [us].
 
 from __future__ import annotations
 
-from cosim.checks import Duration, EdgeRef, PulseRef, ValueAt
+from cosim.checks import Check, Duration, EdgeRef, PulseRef, ValueAt
 from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
@@ -36,12 +36,11 @@ def scenario(run: Run) -> None:
     PositionSwitch(run.sim, engine.steps[0], engine.switches.limit_pos[0], lambda pos: pos >= p.limit_at)
     HostApp(run.sim, engine, to_entries(plan([Move((4 * p.limit_at, 0, 0))], engine.config.axes)), link="usb")
 
-    trip = EdgeRef("pokeys.x.limit_pos", 1, which="first")
-    run.check(Duration(trip, PulseRef("pokeys.x.step", "last"), max=engine.slot_ticks,
-                       name="no pulse after the slot boundary at which the trip is seen"))
-    run.check(Duration(trip, EdgeRef("pokeys.state", 100), max=engine.slot_ticks,
-                       name="state 100 at that slot boundary"))
-    run.check(ValueAt("pokeys.state", None, 100, name="engine stopped by the limit switch"))
+    after_pulses, stopped = stop_at_limit(engine)
+    run.check(after_pulses)
+    run.check(Duration(EdgeRef("pokeys.x.limit_pos", 1, which="first"), EdgeRef("pokeys.state", 100),
+                       max=engine.slot_ticks, name="state 100 at that slot boundary"))
+    run.check(stopped)
 
     def trip_t() -> int:
         t, v = run.sim.trace.edges("pokeys.x.limit_pos")
@@ -50,3 +49,11 @@ def scenario(run: Run) -> None:
     run.figure("stop_distance_pulses", lambda: engine.steps[0].position - p.limit_at, "pulses")
     us = run.sim.ticks("1 us")
     run.figure("stop_time_us", lambda: (int(run.sim.trace.pulses("pokeys.x.step")[0][-1]) - trip_t()) / us, "us")
+
+
+def stop_at_limit(engine: PulseEngine) -> tuple[Check, Check]:
+    """The rules of a limit trip on x (shared with ``pokeys_jog_limit``, where they fail): no pulse after
+    the slot boundary at which the trip is seen, and the engine stopped (state 100) at the end."""
+    return (Duration(EdgeRef("pokeys.x.limit_pos", 1, which="first"), PulseRef("pokeys.x.step", "last"),
+                     max=engine.slot_ticks, name="no pulse after the slot boundary at which the trip is seen"),
+            ValueAt("pokeys.state", None, 100, name="engine stopped by the limit switch"))

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from cosim.checks import IntervalsAbove, ValueAt
+from cosim.checks import ValueAt
 from cosim.scenario import Run
 from cosim.scenarios import pokeys_stall
-from cosim.scenarios.pokeys_stall import stalled_job
+from cosim.scenarios.pokeys_stall import no_underrun, stalled_job
 
 PARAMETERS = tuple(replace(p, default=100) if p.name == "prefill" else p for p in pokeys_stall.PARAMETERS)
 UNTIL = "1.5 s"
@@ -22,7 +22,7 @@ UNTIL = "1.5 s"
 
 def scenario(run: Run) -> None:
     _, host = stalled_job(run)
-    run.check(IntervalsAbove("pokeys.underrun", 0, name="no buffer underrun"))
+    run.check(no_underrun())
     run.check(ValueAt("pokeys.x.step", None, run.p.distance, name="every pulse of the move emitted"))
 
     def lowest_level() -> float:

@@ -7,8 +7,10 @@ they are loaded, and they fire late, at the load::
     fifo_level   256 ‾‾\\_____/\\_____/\\____      empty between refills
     gate_late             x x x x   x x x      the positions passed while it was empty
 
-The checks assert that the starving is reproduced and reported: the late positions are listed
-(in user units) in the check's description and counted in its figures.
+The hazard: ``trio_raster``'s rule "no position is passed before it is loaded" fails (verdict
+HAZARD SHOWN): each late position is a violation, they are listed (in user units) in the check's
+description and counted in its figures. The run ends when the job is done (``UNTIL`` is a safety
+limit); ``--until`` stops it earlier.
 """
 
 from __future__ import annotations
@@ -26,12 +28,14 @@ PARAMETERS = (
     Param("refill_ms", 40.0, "ms", (0.0, 1000.0), "host refill period: too slow for the raster speed"),
     Param("laser", True, "", None, "drive the Laser FMU with the PWM output"),
 )
-UNTIL = "100 ms"
+UNTIL = "600 s"  # a safety limit: the run ends when the job is done (or at --until)
 
 
 def scenario(run: Run) -> None:
     job, trio = raster_job(run)
-    run.check(LatePositions("trio.axis3.gate_late", programmed=job.lines * job.positions, expect_late=True,
-                            name="starving reproduced: positions passed before they were loaded are reported"))
+    run.hazard(LatePositions("trio.axis3.gate_late", programmed=job.lines * job.positions,
+                             name="no position is passed before it is loaded"),
+               shows=f"a host refilling {run.p.chunk} positions every {run.p.refill_ms:g} ms starves the gating "
+                     f"FIFO at {run.p.speed:g} mm/s: positions are passed before they are loaded and fire late")
     run.check(ValueAt("trio.axis3.fifo_level", None, 0, name="every loaded position was used"))
     check_direction_setup(run, trio, job)
