@@ -197,8 +197,12 @@ def _checks(r: Mapping[str, Any]) -> str:
         more = int(c.get("n_violations", 0)) - len(shown)
         if more > 0 and shown:
             shown.append(f"... and {more:,} more in result.json")
-        status = "<span class='ok'>PASS</span>" if c.get("passed") else "<span class='bad'>FAIL</span>"
+        status = badge(str(c.get("verdict") or ("PASS" if c.get("passed") else "FAIL")))
         about = f"<br><span class=note>{html.escape(str(c['description']))}</span>" if c.get("description") else ""
+        if c.get("hazard"):
+            about += f"<br><span class=note>hazard it demonstrates: {html.escape(str(c['hazard']))}</span>"
+        if c.get("nothing_checked"):
+            about += f"<br><span class=note>examined nothing: {html.escape(str(c['nothing_checked']))}</span>"
         rows.append(f"<tr><td class='num'>{k}</td><td>{status}</td><td>{html.escape(str(c.get('name')))}{about}"
                     f"</td><td class='num'>{c.get('checked')}</td><td class='num'>{c.get('n_violations')}</td>"
                     f"<td>{'<br>'.join(shown)}</td></tr>")
