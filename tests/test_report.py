@@ -82,6 +82,19 @@ def test_pulse_train_rate_per_segment_is_signed_by_direction_and_single_pulses_b
     assert drawn.pulses == 26 and drawn.expandable
 
 
+def test_a_pwm_output_cut_by_its_gate_is_drawn_at_its_carrier_rate_and_each_pulse_its_own_width() -> None:
+    """20 kHz carrier (50 us), mark 20 us; the gate cuts the 4th pulse after 5 us: a segment of one
+    pulse 5 us long, which is its high time, not a 200 kHz rate."""
+    trace = Trace()
+    trace.declare("d.pwm_out", "pulse", varying_width=True)
+    trace.record_segment("d.pwm_out", 0, 150_000, 3, 1, width=20_000)
+    trace.record_segment("d.pwm_out", 150_000, 5_000, 1, 1, width=5_000)
+    trace.end_t = 200_000
+    drawn = train(trace, "d.pwm_out", buckets=1)
+    assert drawn.width.tolist() == [20_000, 5_000]
+    assert drawn.rate_hz.tolist() == [4 / 200_000 * 1e9]  # 4 pulses in the 200 us slice: 20 kHz
+
+
 def test_a_train_with_too_many_segments_is_drawn_as_a_rate_and_says_so() -> None:
     trace = Trace()
     trace.declare("d.s", "pulse")

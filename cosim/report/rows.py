@@ -189,6 +189,8 @@ def train(trace: Trace, name: str, *, max_segments: int = MAX_SEGMENTS, buckets:
         count = np.r_[count, np.ones_like(st)][order]
         direction = np.r_[direction, sd][order]
         width = np.r_[width, np.full_like(st, max(trace.info[name].pulse_width, 1))][order]
+    if trace.info[name].varying_width:  # a PWM output: a pulse cut by the gate is a segment of its high time only,
+        left, right, rate = _binned_rate(trace, name, buckets=buckets, rate_scale=rate_scale)  # not a rate
     return Train(t0, duration, count, direction, width, left, right, rate, pulses, True, notes)
 
 
