@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from trio_rigs import laser_axis
 
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
 from cosim.controllers.trio.pwm import (
@@ -23,17 +24,6 @@ from cosim.kernel import Simulation
 from cosim.timebase import Priority
 
 MS = 1_000_000
-
-
-def laser_axis(sim: Simulation, *, cycle: int, mark: int, wdog: int = ON) -> tuple[TrioController, TrioProcess]:
-    """Axis 3 with PWM on (mode 1), no gating."""
-    trio = TrioController(sim, encoder_at_atype=0)
-    p = TrioProcess(trio, base=(3,))
-    p.set("PWM_CYCLE", cycle)
-    p.set("PWM_MARK", mark)
-    p.pwm_control(1)
-    p.set("WDOG", wdog)
-    return trio, p
 
 
 @pytest.mark.parametrize(("cycle", "frequency_hz", "period_ns"), [(1000, 20_000, 50_000), (200, 100_000, 10_000)])

@@ -12,8 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import vcdvcd
+from trio_rigs import laser_axis
 
-from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
+from cosim.controllers.trio import OFF, ON, TrioController
 from cosim.controllers.trio.basic import example
 from cosim.export import read_trace, write_trace
 from cosim.kernel import Simulation
@@ -21,17 +22,6 @@ from cosim.timebase import Priority
 
 MS = 1_000_000
 PIN = "trio.axis3.pwm_out"
-
-
-def laser_axis(sim: Simulation, *, cycle: int = 1000, mark: int = 400) -> TrioProcess:
-    """Axis 3 with PWM on (mode 1, so the gate is open), WDOG on, all at t = 0."""
-    trio = TrioController(sim, encoder_at_atype=0)
-    p = TrioProcess(trio, base=(3,))
-    p.set("PWM_CYCLE", cycle)
-    p.set("PWM_MARK", mark)
-    p.pwm_control(1)
-    p.set("WDOG", ON)
-    return p
 
 
 def pulses(sim_or_trace: object, name: str = PIN) -> list[tuple[int, int]]:
@@ -71,7 +61,7 @@ def test_a_new_mark_changes_the_width_from_the_next_pulse_or_the_one_in_progress
     pin  |‾‾|__|‾‾‾|_|‾‾‾|_ ... |‾|___|‾|___
          1 ms     2 ms          ^ 2_010_000
     """
-    p = laser_axis(sim)
+    _, p = laser_axis(sim)
     sim.call_at(1_010_000, Priority.HOST, lambda: p.set("PWM_MARK", 600))
     sim.call_at(2_010_000, Priority.HOST, lambda: p.set("PWM_MARK", 100))
     sim.run(until=2_200_000)
@@ -86,7 +76,7 @@ def test_closing_the_gate_cuts_the_pulse_at_its_tick_and_opening_it_in_a_mark_st
     """PWM_CONTROL(0) at 1_010_017 ns closes the gate inside a mark: the pin falls at that tick. PWM_CONTROL(1)
     at 2_030_000 (in a space): nothing until the carrier's rise at 2_050_000; closed at 3 ms, opened again at
     4_007_000 (in a mark): a pulse from 4_007_000 to 4_020_000."""
-    p = laser_axis(sim)
+    _, p = laser_axis(sim)
     sim.call_at(1_010_017, Priority.HOST, lambda: p.pwm_control(0))
     sim.call_at(2_030_000, Priority.HOST, lambda: p.pwm_control(1))
     sim.call_at(3 * MS, Priority.HOST, lambda: p.pwm_control(0))
@@ -102,7 +92,7 @@ def test_closing_the_gate_cuts_the_pulse_at_its_tick_and_opening_it_in_a_mark_st
 def test_wdog_off_holds_the_pin_low_and_on_again_resumes_in_the_mark(sim: Simulation) -> None:
     """WDOG=OFF at 300_017 ns cuts the pulse that rose at 300_000; nothing while it is off; WDOG=ON at
     507_000 (7 us into a mark) raises the pin there until 520_000."""
-    p = laser_axis(sim)
+    _, p = laser_axis(sim)
     sim.call_at(300_017, Priority.HOST, lambda: p.set("WDOG", OFF))
     sim.call_at(507_000, Priority.HOST, lambda: p.set("WDOG", ON))
     sim.run(until=600_000)
@@ -112,7 +102,7 @@ def test_wdog_off_holds_the_pin_low_and_on_again_resumes_in_the_mark(sim: Simula
 
 @pytest.mark.parametrize(("cycle", "mark"), [(1000, 1000), (1000, 5000)])
 def test_a_mark_at_or_above_the_cycle_is_one_long_pulse(sim: Simulation, cycle: int, mark: int) -> None:
-    p = laser_axis(sim, cycle=cycle, mark=mark)
+    _, p = laser_axis(sim, cycle=cycle, mark=mark)
     sim.call_at(700_000, Priority.HOST, lambda: p.set("WDOG", OFF))
     sim.run(until=1 * MS)
     assert pulses(sim) == [(0, 700_000)]
@@ -143,7 +133,7 @@ def test_the_vcds_and_the_tables_carry_every_edge_at_its_exact_ns(sim: Simulatio
     """20 kHz / 400 clocks, PWM_MARK 100 (5 us) from 200_000 ns, WDOG off at 310_017: in trace.vcd and
     trace_digital.vcd the pin rises every 50_000 ns and falls 20_000 (then 5_000) ns later, and at 310_017;
     the Parquet and CSV tables read back give the same segments, widths included."""
-    p = laser_axis(sim)
+    _, p = laser_axis(sim)
     sim.call_at(200_000, Priority.HOST, lambda: p.set("PWM_MARK", 100))
     sim.call_at(310_017, Priority.HOST, lambda: p.set("WDOG", OFF))
     sim.run(until=400_000)
