@@ -119,8 +119,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     result = run_scenario(scenario, overrides=_parse_sets(args.overrides), seed=args.seed, until=args.until,
                           out=out, formats=formats, progress=True)
     print(result.table())
-    print(f"results in {out}/ (result.json, {'trace.vcd, ' if not args.no_vcd else ''}{args.format} tables)")
+    print(_results_line(out))
     return _exit_status(result, allow_unchecked=args.allow_unchecked)
+
+
+def _results_line(out: Path) -> str:
+    """Where the run's files are, and which they are (as written, not as expected)."""
+    folder = Path(out)
+    files = folder.iterdir() if folder.is_dir() else iter(())
+    names = sorted(p.name for p in files if p.is_file() and not p.name.startswith("."))
+    return f"results in {folder}/ ({', '.join(names) or 'nothing written'})"
 
 
 def _exit_status(result: Any, *, allow_unchecked: bool = False) -> int:
@@ -297,7 +305,7 @@ def cmd_run_fmu(args: argparse.Namespace) -> int:
     result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, out=out,
                      formats=("vcd", args.format), progress=True)
     print(result.table())
-    print(f"results in {out}/ (result.json, trace.vcd, {args.format} tables: every numeric output on the grid)")
+    print(_results_line(out) + "; the tables hold every numeric output on the grid")
     return _exit_status(result, allow_unchecked=True)  # an FMU run alone declares no checks: UNCHECKED, exit 0
 
 
