@@ -25,7 +25,8 @@ and shows a dot in a name as an escaped ``\\``).
 Both VCDs are written in one pass over the trace, chunk by chunk (:meth:`Trace.pulse_chunks`,
 :meth:`Trace.edge_chunks`, merged in time by :func:`cosim.tracestore.merge_sorted`); the text is
 made with numpy for a whole chunk at once. Memory is about one chunk per signal, whatever the
-length of the run.
+length of the run. (Not pyvcd: its writer takes one value change per Python call, which for the
+millions of pulse edges of a long job costs more than the simulation itself.)
 """
 
 from __future__ import annotations
