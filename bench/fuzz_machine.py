@@ -9,6 +9,7 @@ else is a crash, printed with the input that caused it. Run::
 from __future__ import annotations
 
 import argparse
+import copy
 import random
 import sys
 import tempfile
@@ -54,7 +55,7 @@ def generated(rng: random.Random, folder: Path) -> Path | None:
             if not isinstance(child, dict):
                 child = node[part] = {}
             node = child
-        node[path[-1]] = rng.choice(VALUES)
+        node[path[-1]] = copy.deepcopy(rng.choice(VALUES))  # a shared dict would be mutated, even into itself
     return load_machine_from(document, folder)
 
 
