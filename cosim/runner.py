@@ -184,7 +184,8 @@ class Result:
                 lines.append(f"          at t={v['t_ns']} ns: value {v['value']} vs limit {v['limit']}"
                              + (f" ({v['detail']})" if v.get("detail") else ""))
         for name, fig in self.figures.items():
-            lines.append(f"  figure {name} = {fig['value']:.6g} {fig['unit']}".rstrip())
+            shown = "(could not be evaluated: see the error)" if fig["value"] is None else f"{fig['value']:.6g}"
+            lines.append(f"  figure {name} = {shown} {fig['unit']}".rstrip())
         for note in self.notes[:10]:
             lines.append(f"  note {note}")
         if len(self.notes) > 10:

@@ -119,6 +119,7 @@ def test_a_figure_or_a_check_that_raises_is_an_error_entry_and_the_rest_is_kept(
     assert "no signal named 'blink.gat' in the trace; did you mean blink.gate" in misspelt["error"]
     assert result.figures["good"] == {"value": 2.5, "unit": "s"}
     assert result.figures["text"]["value"] is None and "ValueError" in result.figures["text"]["error"]
+    assert "  figure text = (could not be evaluated: see the error)" in result.table().splitlines()
     assert json.loads((tmp_path / "out" / "result.json").read_text())["checks"][0]["passed"] is True
 
 

@@ -19,7 +19,7 @@ from cosim.runner import run_scenario
 from cosim.scenario import load
 
 SCRIPT = '''"""Verdict case."""
-from cosim.checks import Bound, MinPulseSpacing
+from cosim.checks import Bound, MinPulseSpacing, ValueAt
 from cosim.errors import PlantTerminated
 from cosim.scenario import Run
 from cosim.signals import Signal
@@ -29,11 +29,15 @@ ON = Bound("dev.gate", lower=0, upper=1, name="gate within 0..1")  # holds
 OFF = Bound("dev.gate", lower=0, upper=0, name="gate never on")  # broken at 100 ns
 NONE = MinPulseSpacing("dev.step", 10, name="no step pulses")  # examines nothing
 NONE_OK = MinPulseSpacing("dev.step", 10, allow_empty=True, name="no step pulses, fine")
+AFTER_END = ValueAt("dev.gate", 5000, expected=0, name="gate off at 5 us")  # 5 us: after the run's end
+NAN = ValueAt("dev.level", None, expected=0, name="level 0 at the end")  # the level is NaN: no value
 
 
 def scenario(run: Run) -> None:
     gate = Signal(run.sim, "dev.gate")
     run.sim.trace.declare("dev.step", "pulse")
+    run.sim.trace.declare("dev.level", "real")
+    run.sim.trace.record("dev.level", 0, float("nan"))
 
     def switch_on():
         yield run.sim.at(100)
@@ -55,6 +59,8 @@ CASES = [
     ("hazard missed: its check passed", ["run.hazard(ON, shows='h')"], "HAZARD MISSED", 1),
     ("hazard missed: one of two", ["run.hazard(OFF, shows='h')", "run.hazard(ON, shows='h')"], "HAZARD MISSED", 1),
     ("hazard missed: its check examined nothing", ["run.hazard(NONE, shows='h')"], "HAZARD MISSED", 1),
+    ("hazard missed: its instant was not simulated", ["run.hazard(AFTER_END, shows='h')"], "HAZARD MISSED", 1),
+    ("hazard missed: its value is not a number", ["run.hazard(NAN, shows='h')"], "HAZARD MISSED", 1),
     ("unchecked: no checks", [], "UNCHECKED", 4),
     ("unchecked: every check examined nothing", ["run.check(NONE_OK)"], "UNCHECKED", 4),
     ("unchecked: a check examined nothing", ["run.check(ON)", "run.check(NONE)"], "UNCHECKED", 4),

@@ -290,8 +290,10 @@ class ValueAt(Check):
 
     Notes
     -----
-    ``checked`` is 1 (0 if the signal has no records or pulses at all). Violation: ``value`` = the
-    value (NaN before the first record), ``limit`` = ``expected`` or ``'expected ± tol'``.
+    ``checked`` is 1, or 0 (examined nothing, so neither a pass nor a shown hazard) when the
+    signal has no records or pulses at all, when ``t`` lies after the run's end (not simulated),
+    or when the value at ``t`` is not a number (no record before ``t``, or a NaN recorded: no value
+    to compare). Violation: ``value`` = the value, ``limit`` = ``expected`` or ``'expected ± tol'``.
     Measured: ``value``.
     """
 
@@ -332,7 +334,14 @@ class ValueAt(Check):
         limit = as_number(self.expected) if self.tol == 0 else f"{fmt(self.expected)} ± {fmt(self.tol)}"
         found = Findings(self.signal, checked=1 if any_record else 0,
                          description=f"{what} of {self.signal} at {clock.t_ns(at)} ns is {limit}")
-        if any_record and not abs(value - self.expected) <= self.tol:  # NaN fails too
+        if any_record and at > trace.end_t:
+            found.checked = 0
+            found.empty_detail = (f"t = {clock.t_ns(at)} ns lies after the run's end ({clock.t_ns(trace.end_t)} ns): "
+                                  "nothing was simulated there")
+        elif any_record and np.isnan(value):
+            found.checked = 0
+            found.empty_detail = f"{what} of {self.signal} at {clock.t_ns(at)} ns is not a number: nothing to compare"
+        if found.checked and not abs(value - self.expected) <= self.tol:
             found.n_violations = 1
             found.violations.append(Violation(clock.t_ns(at), as_number(value), limit,
                                               f"{what} of {self.signal} is {fmt(value)}, expected {limit}"))
