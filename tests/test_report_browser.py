@@ -124,7 +124,9 @@ def test_the_view_opens_on_the_first_violation_marked_on_every_row(site: Path, b
 def test_a_pulse_train_shows_its_pulses_when_zoomed_in_and_its_rate_when_zoomed_out(site: Path,
                                                                                      browser: Any) -> None:
     folder = site / "pokeys_stall"
-    t, _ = read_trace(folder).pulses("pokeys.x.step")
+    trace = read_trace(folder)
+    t, _ = trace.pulses("pokeys.x.step")
+    width = trace.info["pokeys.x.step"].pulse_width
     page, messages = _open(browser, folder / "index.html")
     page.wait_for_function(READY)
     state = """(() => {
@@ -137,7 +139,7 @@ def test_a_pulse_train_shows_its_pulses_when_zoomed_in_and_its_rate_when_zoomed_
     assert page.evaluate(state)[:2] == [False, True]  # about 20,000 pulses: the rate
     page.evaluate("Bokeh.documents[0].get_model_by_name('time').setv({start: 100000000, end: 100400000})")
     shown, rate_shown, left = page.evaluate(state)
-    inside = t[(t >= 100_000_000) & (t <= 100_400_000)]
+    inside = t[(t + width > 100_000_000) & (t <= 100_400_000)]  # high at some instant in view
     assert shown and not rate_shown and inside.size > 0
     assert left == inside.tolist()
     page.evaluate("cosimShow(null)")
@@ -161,9 +163,11 @@ def test_the_pages_pulse_rule_is_cosims(site: Path, browser: Any) -> None:
     page.wait_for_function(READY)
     windows = [(float(t0[0] - 5), float(t0[-1] + duration[-1] + 5))]
     windows += [tuple(sorted(rng.uniform(t0[0], t0[-1] + duration[-1], 2).tolist())) for _ in range(30)]
+    wide = int(np.flatnonzero(every_width >= 3)[0])
+    windows.append((float(every[wide] + 1), float(every[wide] + 2)))  # inside one pulse: it is drawn, not a gap
     for start, end in windows:
         found = page.evaluate("([s, a, b]) => cosimPulses(s, a, b, 1e9)", [segments, start, end])
-        inside = (every >= np.ceil(start)) & (every <= np.floor(end))
+        inside = (every + every_width > np.ceil(start)) & (every <= np.floor(end))  # high at some instant in view
         assert found["t"] == every[inside].tolist(), (start, end)
         assert found["width"] == every_width[inside].tolist(), (start, end)
     over = page.evaluate("([s, a, b]) => cosimPulses(s, a, b, 10)", [segments, windows[0][0], windows[0][1]])

@@ -2,7 +2,8 @@
 
 :data:`PULSES_JS` defines ``cosimPulses(seg, start, end, cap)``: the pulses of the segments ``seg``
 (``{t0, duration, count, dir, width}``, arrays of exact integers in ticks, in order of ``t0``) inside
-the window ``[start, end]``, placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a segment at
+the window ``[start, end]`` (high at some instant of it: a pulse that rose before ``start`` and is
+still high counts), placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a segment at
 ``t0 + floor(k * duration / count)``, ``width`` ticks high), or ``null`` when there are more than ``cap``. Integer
 division is corrected after the float division, so the instants are exact while the products stay
 below 2**53 (a segment's ``duration * count``). The browser test runs it against
@@ -25,16 +26,17 @@ function cosimPulses(seg, start, end, cap) {
   const lo = Math.ceil(start), hi = Math.floor(end);
   const t = [], dir = [], w = [];
   for (let i = 0; i < seg.t0.length; i++) {
-    const t0 = seg.t0[i], d = seg.duration[i], c = seg.count[i];
+    const t0 = seg.t0[i], d = seg.duration[i], c = seg.count[i], wi = seg.width ? seg.width[i] : 1;
     if (t0 > hi) { break; }
-    if (c <= 0 || t0 + d <= lo) { continue; }
-    const from = Math.min(Math.max(lo - t0, 0), d), to = Math.min(Math.max(hi - t0 + 1, 0), d);
-    const kmin = -fdiv(-from * c, d);          // first k with floor(k d / c) >= lo - t0
+    if (c <= 0 || t0 + d + wi <= lo) { continue; }
+    // a pulse is in view while high: from the first whose fall (rise + width) is after lo
+    const from = Math.min(Math.max(lo - wi + 1 - t0, 0), d), to = Math.min(Math.max(hi - t0 + 1, 0), d);
+    const kmin = -fdiv(-from * c, d);          // first k with floor(k d / c) >= lo - width + 1 - t0
     const kmax = Math.min(c - 1, fdiv(to * c - 1, d));  // last k with floor(k d / c) <= hi - t0
     if (kmax < kmin) { continue; }
     if (t.length + kmax - kmin + 1 > cap) { return null; }
     for (let k = kmin; k <= kmax; k++) {
-      t.push(t0 + fdiv(k * d, c)); dir.push(seg.dir[i]); w.push(seg.width ? seg.width[i] : 1);
+      t.push(t0 + fdiv(k * d, c)); dir.push(seg.dir[i]); w.push(wi);
     }
   }
   return {t: t, dir: dir, width: w};
