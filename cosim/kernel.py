@@ -25,6 +25,7 @@ from typing import Any
 import simpy
 from simpy.events import Event
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 from cosim.timebase import Priority, TimeBase
 from cosim.trace import Trace
@@ -218,20 +219,49 @@ class Simulation:
         """
         self._stoppers.append(stopper)
 
-    def run(self, until: int) -> None:
+    def run(self, until: int, *, stop_when: Callable[[], bool] | None = None, every: int | None = None) -> None:
         """Run until tick ``until`` (exclusive for events scheduled exactly then).
+
+        With ``stop_when``, the run also stops at the first multiple of ``every`` ticks after now
+        (``now + every``, ``now + 2 every``...) at which ``stop_when()`` is true, before any event
+        of that instant, as if ``until`` had been that instant (for a job that ends on its own).
 
         The trace's end is set to the instant reached, also when a process fails, so whoever
         writes the trace afterwards (the runner) keeps everything recorded up to that instant;
-        then the :meth:`on_stop` callbacks are called.
+        then the :meth:`on_stop` callbacks are called (once per call).
         """
         self.timebase.check_ticks(until, name="until")
+        end: At | None = None
+        watching: list[At] = []  # the next check of stop_when
+        if stop_when is not None:
+            every = validate.integer(every, "every", low=1, unit="ticks", kind="a whole number of ticks")
+            end = At(self.env, until, Priority.URGENT)  # as env.run(until=int) makes it, but cancellable
+            self._watch(stop_when, every, until, end, watching)
         try:
-            self.env.run(until=until)
+            self.env.run(until=until if end is None else end)
         finally:
+            for event in watching:  # stopped otherwise (an error): no check left for a later run
+                self.cancel(event)
             self.trace.end_t = self.now
             for stopper in self._stoppers:
                 stopper(self.now)
+
+    def _watch(self, stop_when: Callable[[], bool], every: int, until: int, end: At, watching: list[At]) -> None:
+        def arm() -> None:
+            watching.clear()
+            if self.now + every < until:
+                event = At(self.env, self.now + every, Priority.URGENT)
+                event.callbacks.append(check)
+                watching.append(event)
+
+        def check(_event: Event) -> None:
+            watching.clear()
+            if stop_when():
+                self.cancel(end)
+                raise simpy.core.StopSimulation(None)
+            arm()
+
+        arm()
 
     def close(self) -> None:
         """Tear down everything registered with :meth:`on_close`."""

@@ -251,8 +251,8 @@ class Run:
         ``--until`` if that comes first. A job cut short by the end gets a note saying so (``what``
         names the job in it): checks of the whole job then fail, they do not pass on part of it.
         """
-        while not done() and self.sim.now < self.until:
-            self.sim.run(until=min(self.sim.now + step, self.until))
+        if not done() and self.sim.now < self.until:  # one run: a recorder's open stretch is not cut at each step
+            self.sim.run(until=self.until, stop_when=done, every=step)
         if done():
             self.until = self.sim.now
             return True

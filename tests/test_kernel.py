@@ -154,3 +154,30 @@ def test_a_seed_outside_0_to_2_63_is_refused_with_its_range(seed: object) -> Non
 
     with pytest.raises(ConfigurationError, match=r"seed = .* is not allowed \(allowed: 0\.\.9223372036854775807\)"):
         Simulation(seed=seed)  # type: ignore[arg-type]
+
+
+def test_a_run_with_stop_when_ends_at_the_first_check_that_holds_before_that_instants_events() -> None:
+    """Checks every 100 ticks from 0; the job is done from tick 250 on: the run stops at 300, and the
+    event at 300 has not run (as with until=300). One stop, one on_stop call; a later run goes on."""
+    sim = Simulation()
+    seen: list[int] = []
+    stops: list[int] = []
+    sim.on_stop(stops.append)
+    for t in (250, 300, 350, 900):
+        sim.call_at(t, Priority.NORMAL, lambda: seen.append(sim.now))
+    sim.run(10_000, stop_when=lambda: sim.now >= 250, every=100)
+    assert (sim.now, seen, stops) == (300, [250], [300])
+    sim.run(1000)
+    assert (sim.now, seen, stops) == (1000, [250, 300, 350, 900], [300, 1000])
+
+
+def test_a_run_with_stop_when_that_never_holds_ends_at_until() -> None:
+    sim = Simulation()
+    asked: list[int] = []
+    sim.run(1000, stop_when=lambda: bool(asked.append(sim.now)), every=300)
+    assert sim.now == 1000 and asked == [300, 600, 900]
+
+
+def test_stop_when_needs_a_positive_whole_period() -> None:
+    with pytest.raises(ConfigurationError, match="every = 0 is not allowed"):
+        Simulation().run(1000, stop_when=lambda: True, every=0)
