@@ -218,6 +218,15 @@ def test_summary_shows_each_verdict_as_written(tmp_path: Path, verdict: str) -> 
     assert f'data-verdict="{verdict}"' in (out / "report.html").read_text()
 
 
+def test_summary_counts_hazards_shown_and_checks_that_examined_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "r"
+    summary = {"checks": 2, "passed": 1, "failed": 0, "unchecked": 1, "hazards": 2, "hazards_shown": 1}
+    (out / "a").mkdir(parents=True)
+    write_site([Entry("a", out / "a", {"verdict": "HAZARD MISSED", "checks": [], "summary": summary})], out)
+    row = (out / "report.html").read_text().split("<td><a href='a/index.html'>a</a></td>")[1].split("</tr>")[0]
+    assert "<td class='num'>1</td><td class='num'>0</td><td class='num'>1</td><td class='num'>1/2</td>" in row
+
+
 def test_a_page_describes_a_scenario_with_its_whole_docstring_and_a_machine_with_its_description() -> None:
     from cosim.catalog import examples, load
     from cosim.report import describe

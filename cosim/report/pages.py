@@ -86,15 +86,24 @@ def summary(entries: Sequence[Entry], out: Path) -> str:
         first = e.description.strip().splitlines()[0] if e.description.strip() else ""
         rows.append(f"<tr><td><a href='{link}'>{html.escape(e.name)}</a></td><td>{badge(str(r.get('verdict')))}</td>"
                     f"<td class='num'>{s.get('passed', 0)}</td><td class='num'>{s.get('failed', 0)}</td>"
+                    f"<td class='num'>{s.get('unchecked', 0)}</td>"
+                    f"<td class='num'>{_hazards(s)}</td>"
                     f"<td>{html.escape(first)}</td><td class='num'>{float(r.get('simulated_s', 0)):g}</td>"
                     f"<td class='num'>{float(r.get('wall_time_s', 0)):.2f}</td></tr>")
     legend = "".join(f"<li>{badge(v)} {html.escape(m)}</li>" for v, (_, m) in VERDICTS.items())
     return (head("cosim report") + f"<h1>cosim report</h1><p>{len(entries)} runs: {total or 'none'}.</p>"
             "<table id='runs'><tr><th>scenario</th><th>verdict</th><th>checks passed</th><th>checks failed</th>"
+            "<th>checks that examined nothing</th><th>hazards shown</th>"
             "<th>description</th><th>simulated [s]</th><th>wall [s]</th></tr>" + "".join(rows) + "</table>"
             f"<h2>Verdicts</h2><ul>{legend}</ul>"
             "<p class='note'>Each run's page has its description, parameters, checks with their violations, "
             "figures, the waveform of every signal and links to its trace files.</p></main></body></html>")
+
+
+def _hazards(summary: Mapping[str, Any]) -> str:
+    """``shown/declared`` hazards of a run, empty when it declares none."""
+    declared = int(summary.get("hazards", 0) or 0)
+    return f"{int(summary.get('hazards_shown', 0) or 0)}/{declared}" if declared else ""
 
 
 def page(entry: Entry, *, out: Path, bokeh: str, plot_script: str, plot_div: str, notes: Sequence[str],
