@@ -640,8 +640,13 @@ def test_value_of_a_register_at_an_instant() -> None:
     assert found(ValueAt("dev.count", 1000, 0).evaluate(trace)) == [(1000, 7, 0)]
     assert ValueAt("dev.power", 10, 10.0, tol=0.5).evaluate(trace).passed
     assert found(ValueAt("dev.power", 10, 10.0, tol=0.25).evaluate(trace)) == [(10, 10.4, "10 ± 0.25")]
-    before = ValueAt("dev.count", 50, 0).evaluate(trace)
-    assert not before.passed and np.isnan(before.violations[0].value)
+    before = ValueAt("dev.count", 50, 0).evaluate(trace)  # no value yet: nothing to compare, not a pass
+    assert not before.passed and before.checked == 0 and not before.violations
+    assert before.nothing_checked == "value of dev.count at 50 ns is not a number: nothing to compare"
+    trace.end_t = 2000
+    assert ValueAt("dev.count", 2000, 7).evaluate(trace).passed
+    after = ValueAt("dev.count", 2001, 7).evaluate(trace)  # not simulated
+    assert not after.passed and after.checked == 0 and "lies after the run's end" in after.nothing_checked
 
 
 # -- in a scenario run ------------------------------------------------------------------------------

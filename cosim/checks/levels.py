@@ -291,7 +291,8 @@ class ValueAt(Check):
     Notes
     -----
     ``checked`` is 1, or 0 (examined nothing, so neither a pass nor a shown hazard) when the
-    signal has no records or pulses at all, when ``t`` lies after the run's end (not simulated),
+    signal has no records or pulses at all, when ``t`` lies after the run's end (not simulated;
+    a trace built by hand without an end, ``end_t`` 0, has no such limit),
     or when the value at ``t`` is not a number (no record before ``t``, or a NaN recorded: no value
     to compare). Violation: ``value`` = the value, ``limit`` = ``expected`` or ``'expected ± tol'``.
     Measured: ``value``.
@@ -334,7 +335,7 @@ class ValueAt(Check):
         limit = as_number(self.expected) if self.tol == 0 else f"{fmt(self.expected)} ± {fmt(self.tol)}"
         found = Findings(self.signal, checked=1 if any_record else 0,
                          description=f"{what} of {self.signal} at {clock.t_ns(at)} ns is {limit}")
-        if any_record and at > trace.end_t:
+        if any_record and 0 < trace.end_t < at:  # (a trace built by hand may have no end: end_t 0)
             found.checked = 0
             found.empty_detail = (f"t = {clock.t_ns(at)} ns lies after the run's end ({clock.t_ns(trace.end_t)} ns): "
                                   "nothing was simulated there")
