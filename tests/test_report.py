@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import json
 import re
+import subprocess
+import sys
 from fractions import Fraction
 from html.parser import HTMLParser
 from pathlib import Path
@@ -235,3 +237,34 @@ def test_a_page_describes_a_scenario_with_its_whole_docstring_and_a_machine_with
     assert text.startswith("Laser PWM: a 40 W CO2 laser gated on twice") and "gate_ms" in text
     mill = load(next(p for p in examples() if p.name == "mill.toml"))
     assert describe(mill) == mill.description != ""
+
+
+PAGE_SCRIPT = """
+import json, sys
+from pathlib import Path
+from cosim.export import write_trace
+from cosim.report import Entry, write_site
+from cosim.trace import Trace
+
+out = Path(sys.argv[1])
+trace = Trace()
+trace.declare("dev.x.step", "pulse", pulse_width=100)
+trace.declare("dev.x.dir", "bit")
+trace.record_segment("dev.x.step", 0, 1_000_000, 20, 1)
+trace.record("dev.x.dir", 0, 1)
+trace.end_t = 2_000_000
+write_trace(trace, out / "demo", formats=("parquet",))
+result = {"scenario": "demo", "verdict": "PASS", "checks": []}
+(out / "demo" / "result.json").write_text(json.dumps(result))
+write_site([Entry("demo", out / "demo", result, "Demo.")], out)
+"""
+
+
+def test_the_same_run_gives_the_same_page_byte_for_byte(tmp_path: Path) -> None:
+    """Bokeh names its document and root element with random uuids; the page must not change from run to run."""
+    pages = []
+    for k in range(2):
+        subprocess.run([sys.executable, "-c", PAGE_SCRIPT, str(tmp_path / str(k))], check=True)
+        pages.append((tmp_path / str(k) / "demo" / "index.html").read_bytes())
+    assert pages[0] == pages[1]
+    assert b"docs_json" in pages[0]  # a Bokeh page indeed
