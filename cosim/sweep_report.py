@@ -39,6 +39,8 @@ def write_report(table: Any, path: Path, *, scenario: str) -> Path:
     from bokeh.models.widgets.markups import Div
     from bokeh.resources import INLINE
 
+    from cosim.report.ids import stable_ids
+
     swept = [p for p in table.attrs.get("swept", []) if f"p.{p}" in table.columns]
     figures = [c for c in table.columns if c.startswith("fig.")] or (
         ["checks_failed"] if "checks_failed" in table.columns else [])
@@ -51,7 +53,8 @@ def write_report(table: Any, path: Path, *, scenario: str) -> Path:
         parts.append(gridplot(plots, ncols=max(1, len(swept)), width=380, height=300, toolbar_location="right"))
     else:
         parts.append(Div(text="<p>No run produced a figure to plot.</p>"))
-    path.write_text(file_html(column(*parts), resources=INLINE, title=f"sweep {scenario}"), encoding="utf-8")
+    text = file_html(column(*parts), resources=INLINE, title=f"sweep {scenario}")
+    path.write_text(stable_ids([text], f"sweep/{scenario}")[0], encoding="utf-8")
     return path
 
 

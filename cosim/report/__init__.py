@@ -23,13 +23,12 @@ from __future__ import annotations
 
 import ast
 import os
-import re
 import shutil
-import uuid
 from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any, Protocol
 
+from cosim.report.ids import stable_ids
 from cosim.report.pages import PAGE, Entry, page, summary
 
 __all__ = ["PAGE", "Entry", "describe", "write_page", "write_report", "write_site"]
@@ -97,22 +96,6 @@ def write_site(entries: Sequence[Entry], out: Path, *, inline: bool = False) -> 
     return path
 
 
-_UUID = re.compile(r"[0-9a-f]{8}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{4}-[0-9a-f]{12}")
-
-
-def _stable_ids(parts: tuple[str, str], name: str) -> tuple[str, str]:
-    """Bokeh's random document and element ids replaced by ones derived from the run's name, in order of
-    first appearance, so that the same run gives the same page byte for byte."""
-    ids: dict[str, str] = {}
-
-    def stable(match: re.Match[str]) -> str:
-        return ids.setdefault(match[0], str(uuid.uuid5(uuid.NAMESPACE_URL, f"cosim-report/{name}/{len(ids)}")))
-
-    script, div = parts
-    script = _UUID.sub(stable, script)
-    return script, _UUID.sub(stable, div)
-
-
 def _copy_library(out: Path) -> Path:
     import bokeh
     from bokeh.util.paths import bokehjs_path
@@ -160,7 +143,7 @@ def write_page(entry: Entry, *, out: Path, library: Path | None = None) -> Path:
         document.add_root(root)
         if wave.on_ready is not None:
             document.js_on_event("document_ready", wave.on_ready)
-        script, div = _stable_ids(components(root), entry.name)
+        script, div = stable_ids(components(root), entry.name)
         notes += wave.notes
         signals, window = wave.signals, (wave.start, wave.end)
         ticks_per_ns = float(1 / (trace.timebase.resolution_s * 10**9))
