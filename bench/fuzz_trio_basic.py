@@ -48,12 +48,14 @@ def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, fl
         except Exception:
             crashes += 1
             if crashes <= 20:
+                Path(crash_dir).mkdir(parents=True, exist_ok=True)  # only when there is something to keep
                 path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"
                 path.write_text(f"{text!r}\n\n{traceback.format_exc()}")
         took = time.monotonic() - started
         if took > SLOW_S:
             slow += 1
             if slow <= 20:
+                Path(crash_dir).mkdir(parents=True, exist_ok=True)
                 (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
         slowest = max(slowest, took)
         inputs += 1
@@ -67,7 +69,6 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--crashes", default="fuzz_crashes")
     args = parser.parse_args()
-    Path(args.crashes).mkdir(parents=True, exist_ok=True)
     seconds = args.minutes * 60
     started = time.monotonic()
     with multiprocessing.Pool(args.workers) as pool:
