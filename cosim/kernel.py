@@ -233,7 +233,7 @@ class Simulation:
         self.timebase.check_ticks(until, name="until")
         end: At | None = None
         watching: list[At] = []  # the next check of stop_when
-        if stop_when is not None:
+        if stop_when is not None and until > self.now:  # (else env.run says why it cannot run)
             every = validate.integer(every, "every", low=1, unit="ticks", kind="a whole number of ticks")
             end = At(self.env, until, Priority.URGENT)  # as env.run(until=int) makes it, but cancellable
             self._watch(stop_when, every, until, end, watching)
