@@ -175,22 +175,23 @@ def train(trace: Trace, name: str, *, max_segments: int = MAX_SEGMENTS, buckets:
         return Train(empty, empty, empty, empty, empty, left, right, rate, pulses, False, notes)
     t0, duration, count, direction, width = (np.concatenate(parts[k]) if parts[k] else np.empty(0, np.int64)
                                              for k in ("t0", "duration", "count", "dir", "width"))
-    sign = np.where(direction == 1, 1.0, -1.0)
-    left, right = t0, t0 + duration
-    rate = sign * count / duration * rate_scale
+    if trace.info[name].varying_width:  # a PWM output: a pulse cut by the gate is a segment of its high time only,
+        left, right, rate = _binned_rate(trace, name, buckets=buckets, rate_scale=rate_scale)  # not a rate
+    else:
+        left, right = t0, t0 + duration
+        rate = np.where(direction == 1, 1.0, -1.0) * count / duration * rate_scale
     if singles_t:
         st, sd = np.concatenate(singles_t), np.concatenate(singles_d)
-        bl, br, brate = _binned(st, sd, end_t=max(trace.end_t, int(st.max()) + 1), buckets=buckets,
-                                rate_scale=rate_scale)
-        left, right, rate = np.r_[left, bl], np.r_[right, br], np.r_[rate, brate]
+        if not trace.info[name].varying_width:  # (the binned rate above counts them already)
+            bl, br, brate = _binned(st, sd, end_t=max(trace.end_t, int(st.max()) + 1), buckets=buckets,
+                                    rate_scale=rate_scale)
+            left, right, rate = np.r_[left, bl], np.r_[right, br], np.r_[rate, brate]
         order = np.argsort(np.r_[t0, st], kind="stable")
         t0 = np.r_[t0, st][order]
         duration = np.r_[duration, np.ones_like(st)][order]
         count = np.r_[count, np.ones_like(st)][order]
         direction = np.r_[direction, sd][order]
         width = np.r_[width, np.full_like(st, max(trace.info[name].pulse_width, 1))][order]
-    if trace.info[name].varying_width:  # a PWM output: a pulse cut by the gate is a segment of its high time only,
-        left, right, rate = _binned_rate(trace, name, buckets=buckets, rate_scale=rate_scale)  # not a rate
     return Train(t0, duration, count, direction, width, left, right, rate, pulses, True, notes)
 
 
