@@ -7,6 +7,7 @@ their memory does not grow with the length of the run.
 What is written (``formats``):
 
 ``trace_meta.json``     always: the resolution, the run's end and each signal's kind, unit and description
+``console.txt``         (by the runner, :func:`write_console`) every console line: time, source, text
 ``vcd``                 ``trace.vcd`` (every signal), ``trace_digital.vcd`` (bits and pulse trains only,
                         for sigrok / PulseView) and ``trace.gtkw`` (a GTKWave view of ``trace.vcd``);
                         see :mod:`cosim.export_vcd`
@@ -49,6 +50,20 @@ FORMATS = ("vcd", "parquet", "csv")
 META = "trace_meta.json"
 #: Rows gathered before a Parquet row group (or a CSV block) is written.
 _BLOCK_ROWS = 1 << 17
+
+
+def write_console(trace: Trace, path: str | Path) -> Path:
+    """Write the trace's console lines as text, one per line: ``<t> ms  [<source>]  <text>``.
+
+    The time is the instant the line was written, in ms with ns digits (exact at 1 ns resolution).
+    An empty console writes an empty file, so that the file always belongs to this run.
+    """
+    path = Path(path)
+    seconds = trace.timebase.seconds
+    with path.open("w", encoding="utf-8") as out:
+        out.writelines(f"{float(seconds(line.t)) * 1e3:14.6f} ms  [{line.source}]  {line.text}\n"
+                       for line in trace.console())
+    return path
 
 
 def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = ("vcd", "parquet")) -> Path:

@@ -27,6 +27,7 @@ from simpy.events import Event
 
 from cosim import validate
 from cosim.errors import ConfigurationError
+from cosim.notes import Notes
 from cosim.timebase import Priority, TimeBase
 from cosim.trace import Trace
 
@@ -120,6 +121,7 @@ class Simulation:
         self.timebase = timebase or TimeBase()
         self.env = _Environment()
         self.trace = Trace(self.timebase)
+        self.notes = Notes()  # what the run's result lists besides checks: see cosim.notes
         self.rng = np.random.default_rng(seed)
         self._closers: list[Callable[[], None]] = []
         self._stoppers: list[Callable[[int], None]] = []

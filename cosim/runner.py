@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from cosim.errors import ConfigurationError, CosimError, PlantTerminated, ScenarioError
-from cosim.export import write_trace
+from cosim.export import write_console, write_trace
 from cosim.kernel import Simulation
 from cosim.outdir import OutputFolder
 from cosim.scenario import Run, ScenarioFile, Values, where
@@ -60,6 +60,10 @@ class Result:
     interrupted: dict[str, Any] | None = None
     #: What the run told the user besides checks and figures (Run.note), in order.
     notes: list[str] = field(default_factory=list)
+    #: Settings that were set, not modelled (``sim.notes.not_modelled``): device, name, value, where.
+    not_modelled: list[dict[str, Any]] = field(default_factory=list)
+    #: How many console lines the run wrote (``console.txt``).
+    console_lines: int = 0
     wall_time_s: float = 0.0
     simulated_s: float = 0.0
     out: Path | None = None
@@ -164,6 +168,8 @@ class Result:
             "terminated": self.terminated,
             "interrupted": self.interrupted,
             "notes": self.notes,
+            "not_modelled": self.not_modelled,
+            "console_lines": self.console_lines,
             "wall_time_s": round(self.wall_time_s, 4),
             "simulated_s": self.simulated_s,
             "real_time_factor": round(self.real_time_factor, 2),
@@ -302,12 +308,15 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         result.until = run.until
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
-        result.notes = list(run.notes)
+        result.notes = [*run.notes, *sim.notes.texts()]
+        result.not_modelled = [item.to_dict() for item in sim.notes.unmodelled()]
+        result.console_lines = sim.trace.console_count
         if result.error is None:
             _evaluate(run, result, scenario)
         try:
             if staged is not None:
                 write_trace(sim.trace, staged.staging, formats=formats)
+                write_console(sim.trace, staged.staging / "console.txt")
                 (staged.staging / "result.json").write_text(to_json(result.to_dict()))
         finally:
             sim.trace.discard_spill()

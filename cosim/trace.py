@@ -13,6 +13,9 @@ Kinds of record (all times are integer ticks of the trace's resolution):
 
 * ``bit`` / ``int`` signals: exact edge lists ``(t, value)``, value held until the next edge;
 * ``real`` signals: value changes or samples ``(t, value)`` (analog outputs at requested times);
+* console lines ``(t, source, text)``: what programs print (Trio ``PRINT``, PMAC ``SEND``, G-code
+  ``(MSG, ...)``) and why a job stopped, in time order (:meth:`Trace.write_line`,
+  :meth:`Trace.console`); the runner writes them to ``console.txt``;
 * ``pulse`` trains: segments ``(t0, duration, count, dir)`` placed by the rule of
   :mod:`cosim.pulses`, plus any pulses given one by one; :meth:`Trace.pulses` materialises them.
   Each pulse is high for the train's ``pulse_width``, or, in a train declared with
@@ -56,11 +59,22 @@ Floats = npt.NDArray[np.float64]
 Int8s = npt.NDArray[np.int8]
 #: Most pulses in one chunk of :meth:`Trace.pulse_chunks` (about 2.3 MiB of ``t, dir``).
 CHUNK_PULSES = 1 << 18
+#: Console lines kept in memory; more go to a file in the spill folder (an hour of PRINT in a loop stays bounded).
+CONSOLE_LINES = 1 << 16
 _VALUE_FIELDS = (("t", "q"), ("v", "d"))
 _SEGMENT_FIELDS = (("t0", "q"), ("duration", "q"), ("count", "q"), ("dir", "b"))
 _WIDTH_SEGMENT_FIELDS = (*_SEGMENT_FIELDS, ("width", "q"))
 SEGMENT_COLUMNS = ("t0", "duration", "count", "dir", "width")
 _SINGLE_FIELDS = (("t", "q"), ("dir", "b"))
+
+
+@dataclass(frozen=True)
+class ConsoleLine:
+    """One line of the run's console: when [ticks], who wrote it, and the text."""
+
+    t: int
+    source: str
+    text: str
 
 
 @dataclass(frozen=True)
@@ -123,6 +137,9 @@ class Trace:
         self._pulse_cache: dict[str, tuple[tuple[int, int], npt.NDArray[np.int64], npt.NDArray[np.int8]]] = {}
         self.end_t = 0
         self.meta: dict[str, object] = {}
+        self._lines: list[ConsoleLine] = []
+        self._lines_spilled = 0
+        self._lines_file: Any = None
 
     # -- declaring and recording -------------------------------------------------------------
     def declare(self, name: str, kind: str, *, unit: str = "", description: str = "",
@@ -217,6 +234,34 @@ class Trace:
         d_column.append(direction)
         if len(t_column) >= columns.limit:
             columns.spill()
+
+    def write_line(self, t: int, source: str, text: str) -> None:
+        """Record a console line at tick ``t``: ``source`` says who wrote it (``trio.proc1``,
+        ``pmac.plc3``, ``gcode``, ``trio.job``), ``text`` is one line (line breaks become spaces)."""
+        line = ConsoleLine(int(t), str(source), " ".join(str(text).splitlines()))
+        self._lines.append(line)
+        if len(self._lines) >= CONSOLE_LINES:
+            if self._lines_file is None:
+                self._lines_file = (self._spool.folder() / "console.tsv").open("w", encoding="utf-8")
+                self._spool.keep(self._lines_file)
+            self._lines_file.writelines(f"{c.t}\t{c.source}\t{c.text.replace(chr(9), ' ')}\n" for c in self._lines)
+            self._lines_spilled += len(self._lines)
+            self._lines.clear()
+
+    def console(self) -> Iterator[ConsoleLine]:
+        """Every console line in the order written (spilled ones read back from disk)."""
+        if self._lines_file is not None:
+            self._lines_file.flush()
+            with (self._spool.folder() / "console.tsv").open(encoding="utf-8") as spilled:
+                for row in spilled:
+                    t, source, text = row.rstrip("\n").split("\t", 2)
+                    yield ConsoleLine(int(t), source, text)
+        yield from self._lines
+
+    @property
+    def console_count(self) -> int:
+        """How many console lines were written."""
+        return self._lines_spilled + len(self._lines)
 
     # -- memory -------------------------------------------------------------------------------
     @property

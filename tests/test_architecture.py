@@ -32,7 +32,7 @@ PACKAGE = Path(cosim.__file__).resolve().parent
 FMU_SRC = PACKAGE.parent / "fmu_src"
 #: What a controller may import from cosim.
 CONTROLLER_MAY_IMPORT = ("cosim.controllers", "cosim.kernel", "cosim.signals", "cosim.timebase", "cosim.errors",
-                         "cosim.validate", "cosim.encoders", "cosim.pulses")
+                         "cosim.validate", "cosim.encoders", "cosim.pulses", "cosim.job")
 #: Imported by controllers only for type annotations (never at run time).
 CONTROLLER_MAY_TYPE_WITH = ("cosim.trace",)
 

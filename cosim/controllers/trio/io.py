@@ -138,6 +138,7 @@ class Console:
 
     def __init__(self, sim: Simulation, device: str) -> None:
         self.sim = sim
+        self.device = device
         self.lines: list[ConsoleLine] = []
         self.count = Signal(sim, f"{device}.print", kind="int", unit="lines",
                             description="PRINT lines written so far (the text is in the controller's console)")
@@ -145,6 +146,7 @@ class Console:
     def write(self, *, process: int, program: str, line: int, text: str) -> None:
         """Record a completed line now."""
         self.lines.append(ConsoleLine(self.sim.now, process, program, line, text))
+        self.sim.trace.write_line(self.sim.now, f"{self.device}.proc{process}", f"{program}:{line}  {text}")
         self.count.set(len(self.lines))
         LOG.info("t = %d ticks [%d] %s:%d  %s", self.sim.now, process, program, line, text)
 
