@@ -36,10 +36,12 @@ from cosim.errors import ConfigurationError, CosimError, PlantTerminated, Scenar
 from cosim.export import write_console, write_trace
 from cosim.kernel import Simulation
 from cosim.outdir import OutputFolder
-from cosim.scenario import Run, ScenarioFile, Values, where
+from cosim.scenario import Run, ScenarioFile, Values, user_line, where
 from cosim.timebase import TimeBase
 
 RESULT_VERSION = 1
+#: Console lines (PRINT, SEND, (MSG, ...), job stops) the terminal table shows; all are in console.txt.
+CONSOLE_SHOWN = 10
 
 
 @dataclass
@@ -64,6 +66,8 @@ class Result:
     not_modelled: list[dict[str, Any]] = field(default_factory=list)
     #: How many console lines the run wrote (``console.txt``).
     console_lines: int = 0
+    #: The first :data:`CONSOLE_SHOWN` console lines as the table shows them (``0.125 s  [trio.proc1]  text``).
+    console_head: list[str] = field(default_factory=list)
     wall_time_s: float = 0.0
     simulated_s: float = 0.0
     out: Path | None = None
@@ -196,6 +200,12 @@ class Result:
             lines.append(f"  note {note}")
         if len(self.notes) > 10:
             lines.append(f"  ... and {len(self.notes) - 10} more notes in result.json")
+        if self.console_lines:
+            lines.append(f"  console ({self.console_lines} line{'s' if self.console_lines != 1 else ''}, all in "
+                         "console.txt):")
+            lines += [f"    {line}" for line in self.console_head]
+            if self.console_lines > len(self.console_head):
+                lines.append(f"    ... and {self.console_lines - len(self.console_head)} more")
         if self.error:
             lines.append(f"  ERROR {self.error}")
         if self.terminated:
@@ -308,9 +318,13 @@ def run_scenario(scenario: ScenarioFile, *, overrides: dict[str, str] | None = N
         result.until = run.until
         result.wall_time_s = time.perf_counter() - started
         result.simulated_s = sim.timebase.seconds(sim.trace.end_t)
+        if result.error is None:
+            _finish(run, result, scenario)
         result.notes = [*run.notes, *sim.notes.texts()]
         result.not_modelled = [item.to_dict() for item in sim.notes.unmodelled()]
         result.console_lines = sim.trace.console_count
+        result.console_head = [f"{sim.timebase.seconds(line.t):g} s  [{line.source}]  {line.text}"
+                               for line, _ in zip(sim.trace.console(), range(CONSOLE_SHOWN), strict=False)]
         if result.error is None:
             _evaluate(run, result, scenario)
         try:
@@ -342,25 +356,50 @@ def interrupts_raise() -> Iterator[None]:
         signal.signal(signal.SIGTERM, previous)
 
 
+def _finish(run: Run, result: Result, scenario: ScenarioFile) -> None:
+    """The run's :meth:`~cosim.scenario.Run.afterwards` callbacks (notes on the whole run); one raising is an error."""
+    for callback in run.finishers:
+        try:
+            callback()
+        except Exception as exc:
+            _first_error(result, where(exc, scenario.path) + f"{type(exc).__name__}: {exc}", "script")
+
+
 def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
-    """Every check and figure on its own: one that raises is an error entry, the others still count."""
+    """Every check and figure on its own: one that raises is an error entry, the others still count.
+
+    The error names the line that raised in the user's code (a custom check's ``evaluate``), else
+    where the check or figure was declared.
+    """
     for spec, declared, shows in zip(run.checks, run.declared, run.hazards, strict=True):
         try:
             result.checks.append({**spec.evaluate(run.sim.trace).to_dict(), "hazard": shows})
         except Exception as exc:
-            text = f"{declared}check {_label(spec)}: {exc.args[0] if isinstance(exc, KeyError) else exc}"
+            place = user_line(exc, scenario.path) or declared
+            text = f"{place}check {_label(spec)}: {exc.args[0] if isinstance(exc, KeyError) else exc}"
+            if not isinstance(exc, KeyError | CosimError):
+                text = f"{place}check {_label(spec)}: {type(exc).__name__}: {exc}"
             result.checks.append({"name": _label(spec), "outcome": "ERROR", "passed": False, "checked": 0,
                                   "n_violations": 0, "violations": [], "measured": {}, "error": text,
                                   "hazard": shows})
             _first_error(result, text, "configuration" if isinstance(exc, KeyError | ConfigurationError) else "run")
     for name, (value, unit) in run.figures.items():
+        declared_at = run.figure_declared.get(name)
         try:
             number = value() if callable(value) else value
-            result.figures[name] = {"value": float(number), "unit": unit}
+            result.figures[name] = {"value": _number(number, name), "unit": unit}
         except Exception as exc:
-            text = where(exc, scenario.path) + f"figure {name}: {type(exc).__name__}: {exc}"
+            place = user_line(exc, scenario.path) or (f"{declared_at}: " if declared_at else "")
+            text = place + f"figure {name}: {type(exc).__name__}: {exc}"
             result.figures[name] = {"value": None, "unit": unit, "error": text}
             _first_error(result, text, "script")
+
+
+def _number(value: object, name: str) -> float:
+    """A figure's value as a float; a value that is not a number is refused naming it (not float('abc'))."""
+    if isinstance(value, bool) or (not isinstance(value, int | float) and not hasattr(value, "__float__")):
+        raise TypeError(f"the value {value!r} is a {type(value).__name__}, not a number")
+    return float(value)  # type: ignore[arg-type]
 
 
 def _label(spec: object) -> str:

@@ -168,8 +168,12 @@ class Run:
     #: The scenario's name, for messages.
     scenario: str = ""
     figures: dict[str, tuple[Callable[[], float] | float, str]] = field(default_factory=dict)
+    #: Where each figure was declared (``file:line`` or ``file: key``), for messages after the run.
+    figure_declared: dict[str, str] = field(default_factory=dict)
     plants: list[Plant] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    #: Called once the simulation has ended, before the notes are collected (:meth:`afterwards`).
+    finishers: list[Callable[[], None]] = field(default_factory=list)
 
     def plant(self, model: str | Path, *, name: str, fmi_version: int = 3, preset: str | None = None,
               parameters: Mapping[str, Value] | None = None) -> Plant:
@@ -222,9 +226,81 @@ class Run:
         """
         self.notes.append(str(text))
 
-    def figure(self, name: str, value: Callable[[], float] | float, unit: str = "") -> None:
-        """Declare a key figure for the summary (a callable is evaluated after the run)."""
+    def figure(self, name: str, value: Callable[[], float] | float, unit: str = "", *,
+               where: str | None = None) -> None:
+        """Declare a key figure for the summary (a callable is evaluated after the run).
+
+        ``where`` says where it was declared, for a value that is not a number (default: the calling
+        line of the script, ``file:line``).
+        """
+        if where is None:
+            caller = sys._getframe(1)
+            where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
         self.figures[name] = (value, unit)
+        self.figure_declared[name] = where
+
+    def afterwards(self, callback: Callable[[], None]) -> None:
+        """Call ``callback`` once the simulation has ended, before the notes are collected.
+
+        For what can only be said of the whole run, from its trace: a laser that never fired, an
+        axis that never moved (:meth:`note` it there).
+        """
+        self.finishers.append(callback)
+
+    def job(self, controller: Any, *, shows: str | None = None, ends: str | None = None,
+            where: str | None = None) -> bool:
+        """Declare that ``controller``'s job must complete, and the figure ``job_s`` (when it ended [s]).
+
+        The check is :class:`cosim.checks.JobCompleted` on the controller's ``<device>.job`` signal
+        (``controller.job``, a :class:`cosim.job.Job`): every program reached its end, without a
+        limit, emergency or error stop. ``job_s`` is the instant the job ended (nan if it did not).
+
+        Parameters
+        ----------
+        controller : object
+            A controller with a ``job``; one without declares nothing (returns False).
+        shows : str, optional
+            The scenario demonstrates that the job does *not* complete: the check is declared as
+            this hazard (:meth:`hazard`): ``HAZARD SHOWN`` when the job stops.
+        ends : {'error', 'limit', 'emergency', 'aborted'}, optional
+            With ``shows``: the stop that shows it; a second, ordinary check then requires the job
+            to end in that stop (a job that stops otherwise, or completes, is a ``FAIL``).
+        where : str, optional
+            Where it was declared, for messages (default: the calling line).
+        """
+        from cosim.checks import JobCompleted
+        from cosim.checks.job import ENDS, job_end_t
+
+        job = getattr(controller, "job", None)
+        if job is None:
+            return False
+        if where is None:
+            caller = sys._getframe(1)
+            where = f"{caller.f_code.co_filename}:{caller.f_lineno}"
+        signal = job.signal.name
+        if ends is not None:
+            if shows is None:
+                raise ConfigurationError(f"{where}: a job's expected stop (ends = {ends!r}) is a hazard the "
+                                         "scenario shows: say which with shows = \"...\"")
+            from cosim import validate
+
+            validate.choice(ends, "ends", tuple(e for e in ENDS if e != "done"), where=where)
+        healthy = JobCompleted(signal, name=f"the {signal.rpartition('.')[0]} job completed")
+        if shows is None:
+            self.check(healthy, where=where)
+        else:
+            self.hazard(healthy, shows=shows, where=where)
+            if ends is not None:
+                self.check(JobCompleted(signal, ends=ends, name=f"the {signal.rpartition('.')[0]} job ends in a "
+                                                                 f"{ends} stop"), where=where)
+        trace, timebase = self.sim.trace, self.sim.timebase
+
+        def ended() -> float:
+            t = job_end_t(trace, signal)
+            return float("nan") if t is None else timebase.seconds(t)
+
+        self.figure("job_s", ended, "s", where=where)
+        return True
 
     def run_until(self, t: int) -> None:
         """Run the simulation to tick ``t`` (for scenarios with phases).
@@ -371,6 +447,36 @@ def _import(path: Path) -> ModuleType:
         del sys.modules[module.__name__]
         raise ScenarioError(where(exc, path) + f"{type(exc).__name__}: {exc}") from exc
     return module
+
+
+def user_line(exc: BaseException, path: Path) -> str:
+    """``file:line: `` of the innermost frame of ``exc`` in the user's code, or ``""``.
+
+    The user's code is the scenario file ``path`` (as :func:`where`), else any Python file outside
+    cosim's package, the standard library and the installed packages: a custom check's module.
+    """
+    found = where(exc, path)
+    if found:
+        return found
+    import sysconfig
+
+    ours = [str(Path(__file__).resolve().parent)] + [
+        str(Path(p).resolve()) for key in ("stdlib", "platstdlib", "purelib", "platlib")
+        if (p := sysconfig.get_paths().get(key))]
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        seen.add(id(current))
+        location = ""
+        for frame, line in traceback.walk_tb(current.__traceback__):
+            name = frame.f_code.co_filename
+            if name.startswith("<") or any(str(Path(name).resolve()).startswith(o) for o in ours):
+                continue
+            location = f"{name}:{line}: "
+        if location:
+            return location
+        current = current.__cause__ or current.__context__
+    return ""
 
 
 def where(exc: BaseException, path: Path) -> str:

@@ -203,6 +203,11 @@ def integer(value: object, name: str, *, low: int | None = None, high: int | Non
     return number
 
 
+def integer_range(low: int | None, high: int | None, unit: str = "") -> str:
+    """The range ``low..high`` of an integer as messages say it (``any integer`` without bounds)."""
+    return _integer_text(low, high, unit, None).replace("an integer", "any integer")
+
+
 def _integer_text(low: int | None, high: int | None, unit: str, allowed: str | None) -> str:
     if allowed is not None:
         return allowed

@@ -24,9 +24,11 @@ from cosim.checks.direction import DirectionSetup
 from cosim.checks.duration import Duration, EdgeRef, PulseRef
 from cosim.checks.edge_position import EdgeAtPosition
 from cosim.checks.energy import EnergyPerLength
+from cosim.checks.job import JobCompleted
 from cosim.checks.levels import Bound, IntervalsAbove, IntervalsBelow, NoUnderrun, ValueAt
 from cosim.checks.pulse_timing import MaxPulseRate, MinPulseSpacing, PulsesPerWindow
 from cosim.checks.result import MAX_REPORTED, CheckResult, Violation
+from cosim.checks.travel import Travel
 
 __all__ = [
     "MAX_REPORTED",
@@ -42,11 +44,13 @@ __all__ = [
     "Findings",
     "IntervalsAbove",
     "IntervalsBelow",
+    "JobCompleted",
     "MaxPulseRate",
     "MinPulseSpacing",
     "NoUnderrun",
     "PulseRef",
     "PulsesPerWindow",
+    "Travel",
     "ValueAt",
     "Violation",
 ]

@@ -8,7 +8,7 @@ and durations in ns (see :class:`Clock`).
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
@@ -27,6 +27,9 @@ Floats = npt.NDArray[np.float64]
 VALUE_KINDS = ("bit", "int", "real")
 #: What a tick parameter must be, as messages say it (``cosim.validate.integer(..., kind=TICKS)``).
 TICKS = "an integer number of ticks"
+#: Parameters of a check that name a signal (besides ``signal`` and ``*_signal``), and lists of them.
+SIGNAL_FIELDS = ("signal", "step", "direction", "gate")
+SIGNAL_LISTS = ("positions",)
 
 
 @dataclass(frozen=True)
@@ -95,6 +98,24 @@ class Check:
     def label(self) -> str:
         """The name used in results and error messages."""
         return self.name or f"{type(self).__name__}({self.main_signal})"
+
+    def signals(self) -> dict[str, str]:
+        """The signals the check reads, by the parameter that names each (to check them before a run).
+
+        A parameter names a signal when it is called ``signal``, ``*_signal``, ``step``,
+        ``direction`` or ``gate`` (a list: ``positions``), or is an event reference (``start``,
+        ``end``: :class:`~cosim.checks.EdgeRef`, :class:`~cosim.checks.PulseRef`).
+        """
+        out: dict[str, str] = {}
+        for item in fields(self):
+            value = getattr(self, item.name)
+            if isinstance(getattr(value, "signal", None), str):
+                out[f"{item.name}.signal"] = value.signal
+            elif isinstance(value, str) and (item.name in SIGNAL_FIELDS or item.name.endswith("_signal")):
+                out[item.name] = value
+            elif item.name in SIGNAL_LISTS and isinstance(value, list | tuple):
+                out.update({f"{item.name}[{i}]": v for i, v in enumerate(value) if isinstance(v, str)})
+        return out
 
     def evaluate(self, trace: Trace) -> CheckResult:
         """Evaluate the check on ``trace``.

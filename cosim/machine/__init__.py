@@ -40,6 +40,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from cosim import validate
 from cosim.errors import ConfigurationError
 from cosim.machine.document import Table, apply_overrides, read_document
 from cosim.scenario import Param, Run, ScenarioFile
@@ -59,7 +60,7 @@ class MachineFile(ScenarioFile):
         return apply_overrides(self.document, dict(overrides or {}), file=self.path)
 
     def until_for(self, values: Mapping[str, Any]) -> str | int:
-        """The end time the (overridden) document gives."""
+        """The end time the (overridden) document gives (checked: a time with a unit, naming the file)."""
         return _until(values, self.path)
 
     def resolution_for(self, values: Mapping[str, Any]) -> Fraction:
@@ -91,8 +92,8 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
     if not isinstance(machine, dict):
         raise ConfigurationError(f"{path}: machine: the [machine] table is missing (it holds at least until = "
                                  "the end time, e.g. until = \"2 s\")")
-    _until(document, path)
     _resolution(document, path)
+    _until(document, path)
     name = machine.get("name", path.stem if program is None else f"{path.stem}-{Path(program).stem}")
     if not isinstance(name, str) or not name:
         raise ConfigurationError.out_of_range("machine.name", name, "a non-empty string", where=str(path))
@@ -110,13 +111,24 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
                        until=_until(document, path), function=build, document=document)
 
 
-def _until(document: Mapping[str, Any], path: Path) -> str | int:
+def _until(document: Mapping[str, Any], path: Path) -> str:
+    """``machine.until``: a time with a unit, > 0, a whole number of ticks of the machine's resolution."""
     until = document.get("machine", {}).get("until")
     if until is None:
         raise ConfigurationError(f"{path}: machine.until is missing (required: the end time, e.g. \"2 s\")")
-    if isinstance(until, bool) or not isinstance(until, str | int):
+    if isinstance(until, int | float) and not isinstance(until, bool):
+        raise ConfigurationError.out_of_range("machine.until", until, f"a time with a unit: did you mean "
+                                              f"\"{validate.shown(until)} s\"?", where=str(path))
+    if not isinstance(until, str):
         raise ConfigurationError.out_of_range("machine.until", until, "a time with a unit, e.g. \"2 s\"",
                                               where=str(path))
+    timebase = TimeBase(_resolution(document, path))
+    try:
+        ticks = timebase.ticks(until, name="machine.until")
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"{path}: {exc}") from None
+    if ticks <= 0:
+        raise ConfigurationError.out_of_range("machine.until", until, "a time > 0, e.g. \"2 s\"", where=str(path))
     return until
 
 

@@ -3,7 +3,9 @@
 The order is the machine's wiring order, top to bottom, like a scenario script's: the controller
 (its family reads ``[controller]``), every ``[plant.NAME]`` (loaded, then coupled to the
 controller's ports), the programs and the family's own tables, the ``[[stimulus]]`` schedules,
-the ``[[check]]`` and ``[[figure]]`` tables; finally every key of the file must have been used.
+the job's check and the axes' travel (:mod:`cosim.machine.expect`), the ``[[check]]`` and
+``[[figure]]`` tables (every signal they name must be one the machine has), and the warnings said
+after the run; finally every key of the file must have been used.
 Everything here happens at t = 0, before the run: a bad key, value, file, FMU or variable mapping
 stops the machine before anything is simulated.
 """
@@ -23,6 +25,7 @@ from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError
 from cosim.machine.checks import check_from_table, figure_from_table
 from cosim.machine.document import Table
+from cosim.machine.expect import declare_job, declare_travel, declare_warnings, signal_problem
 from cosim.machine.families import Family, families
 from cosim.master import PlantLike
 from cosim.scenario import Run
@@ -43,28 +46,45 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
     family_name = controller_table.text("family", choices=sorted(families()))
     family: Family = families()[family_name]
     controller = family.controller(run, controller_table, base=base)
-    plants = {name: _plant(run, family, controller, name, table, base=base)
+    couplings: list[tuple[str, str, Any]] = []
+    plants = {name: _plant(run, family, controller, name, table, couplings, base=base)
               for name, table in document.table("plant").items()}
     family.start(run, controller, document.tables("program"), document, base=base)
     for table in document.tables("stimulus"):
         _stimulus(run, controller, table)
+    declare_job(run, controller, document.table("job"))
+    declare_travel(run, family_name, controller, document.table("travel"), document)
+    trace = run.sim.trace
     for table in document.tables("check"):
         shows = table.text("hazard", None)  # a declared hazard: the check is expected to fail
         check, where = check_from_table(table), f"{table.file}: {table.path}"
+        _signals_known(table, check.signals(), trace, plants)
         if shows is None:
             run.check(check, where=where)
         else:
             with table.at("hazard"):
                 run.hazard(check, shows=shows, where=where)
-    trace = run.sim.trace
     for table in document.tables("figure"):
         name, value, unit = figure_from_table(table, plants)
-        run.figure(name, lambda value=value: value(trace), unit)  # type: ignore[misc]
+        if table.has("signal"):
+            _signals_known(table, {"signal": table.data["signal"]}, trace, plants)
+        run.figure(name, lambda value=value: value(trace), unit,  # type: ignore[misc]
+                   where=f"{table.file}: {table.path}")
+    declare_warnings(run, couplings)
     document.finish()
     return controller
 
 
-def _plant(run: Run, family: Family, controller: Any, name: str, table: Table, *, base: Path) -> PlantLike:
+def _signals_known(table: Table, names: dict[str, Any], trace: Any, plants: dict[str, PlantLike]) -> None:
+    """Refuse a check or figure whose signal the machine does not have (before the run, naming the key)."""
+    for key, name in names.items():
+        problem = signal_problem(trace, name, plants)
+        if problem is not None:
+            raise ConfigurationError(f"{table.file}: {table.key(key)}: {problem}")
+
+
+def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
+           couplings: list[tuple[str, str, Any]], *, base: Path) -> PlantLike:
     if not PLANT_NAME.match(name):
         raise ConfigurationError(f"{table.file}: {table.path}: a plant name is lower case [a-z0-9_], starting "
                                  f"with a letter (it prefixes the plant's signals); got {name!r}")
@@ -96,6 +116,7 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table, *
             continue
         spec = table.table(kind)
         port = family.port(controller, kind, spec)
+        couplings.append((kind, name, port))
         variables = spec.raw("variables", None)
         if variables is not None and not isinstance(variables, dict):
             raise spec.error("variables", variables, "a table {role = \"variable\"} (a role = \"\" leaves it unwired)")

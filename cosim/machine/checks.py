@@ -76,6 +76,8 @@ def check_from_table(table: Table) -> Check:
     cls = CHECKS[kind]
     hints = typing.get_type_hints(cls)
     times = TIME_FIELDS.get(kind, ())
+    parameters = [f.name for f in dataclasses.fields(cls)]
+    table.only(["type", *parameters, "hazard"], what=f"the keys of a {kind} check")
     kwargs: dict[str, Any] = {}
     for field in dataclasses.fields(cls):
         if field.name not in table.data:
@@ -122,6 +124,7 @@ def _ref(value: Any) -> EdgeRef | PulseRef:
 
 def figure_from_table(table: Table, plants: Mapping[str, PlantLike]) -> tuple[str, Callable[[Trace], float], str]:
     """``(name, value(trace), unit)`` of a ``[[figure]]`` table (``plants``: the machine's, by name)."""
+    table.only(["name", "unit", "output", "signal", "reduce"], what="the keys of a figure")
     name = table.text("name")
     unit = table.text("unit", "")
     output = table.text("output", None)

@@ -19,9 +19,11 @@ never silently ignored).
 from __future__ import annotations
 
 import difflib
+import re
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 from typing import Any, TypeVar
@@ -45,7 +47,37 @@ def read_document(path: Path) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigurationError(f"{path}: not a valid TOML machine file: {exc}") from None
+        raise ConfigurationError(_toml_error(path, text, str(exc))) from None
+
+
+_AT_LINE = re.compile(r"\(at line (\d+), column (\d+)\)")
+_HEADER = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?")
+
+
+def _toml_error(path: Path, text: str, message: str) -> str:
+    """A TOML error with the file and line, and for a key given twice the key by its dotted name."""
+    at = _AT_LINE.search(message)
+    if at is None:
+        return f"{path}: not a valid TOML machine file: {message}"
+    number = int(at.group(1))
+    lines = text.splitlines()
+    line = lines[number - 1] if 0 < number <= len(lines) else ""
+    twice = "Cannot overwrite" in message or "twice" in message or "Duplicate" in message
+    if not twice:
+        return f"{path}:{number}: not a valid TOML machine file: {message}\n    {line.strip()}"
+    header = _HEADER.match(line)
+    if header is not None and "=" not in line.split("]")[0]:
+        key = header.group(1).replace(" ", "")
+    else:
+        table = next((m.group(1).replace(" ", "") for m in (_HEADER.match(x) for x in reversed(lines[:number - 1]))
+                      if m is not None), "")
+        name = line.split("=", 1)[0].strip().strip("{").strip()
+        duplicate = re.search(r"key '([^']+)'", message)
+        if duplicate is not None:
+            name = f"{name}.{duplicate.group(1)}"
+        key = f"{table}.{name}" if table else name
+    return (f"{path}:{number}: {key} is given twice (a key may appear once in a TOML file; the second is on "
+            f"line {number}: {line.strip()})")
 
 
 def machine_description(path: Path) -> str:
@@ -110,6 +142,31 @@ def _creatable(data: dict[str, Any], key: str) -> bool:
     return isinstance(data.get(key.split(".")[0]), dict)
 
 
+@dataclass(frozen=True)
+class KeySpec:
+    """What a key of a machine file takes, as the machine's builder asked for it (for ``cosim params``).
+
+    Parameters
+    ----------
+    key : str
+        Dotted key (``controller.axis.x.max_speed_hz``).
+    value : object
+        The value in the file, or the default the builder used (None: no default).
+    given : bool
+        The file (or ``--set``) gives the key.
+    unit : str
+        Unit of the value (``time`` for a time written with its unit).
+    allowed : str
+        The allowed values or range.
+    """
+
+    key: str
+    value: Any
+    given: bool
+    unit: str = ""
+    allowed: str = ""
+
+
 class Table:
     """One TOML table of a machine file, with its dotted place for messages.
 
@@ -132,6 +189,8 @@ class Table:
         self.timebase = timebase or TimeBase()
         self.used: set[str] = set()
         self.children: list[Table] = []
+        #: What each key takes, by name, as the getters asked for it (:meth:`specs`).
+        self.key_specs: dict[str, KeySpec] = {}
 
     # -- places and errors ----------------------------------------------------------------------
     def key(self, name: str) -> str:
@@ -159,6 +218,23 @@ class Table:
             place = self.key(name) if name is not None else (self.path or "the document")
             raise ConfigurationError(f"{self.file}: {place}: {text}") from exc
 
+    # -- what keys take (for `cosim params`) ----------------------------------------------------
+    def _spec(self, name: str, default: Any, unit: str, allowed: str) -> None:
+        given = name in self.data
+        value = self.data[name] if given else (None if default is _MISSING else default)
+        self.key_specs.setdefault(name, KeySpec(self.key(name), value, given, unit, allowed))
+
+    def describe(self, name: str, *, unit: str = "", allowed: str = "") -> None:
+        """Say what key ``name`` takes when it is read with :meth:`raw` and checked elsewhere."""
+        self.key_specs[name] = KeySpec(self.key(name), self.data.get(name), name in self.data, unit, allowed)
+
+    def specs(self) -> list[KeySpec]:
+        """What every key read here and in the sub-tables takes, in the order they were read."""
+        out = list(self.key_specs.values())
+        for child in self.children:
+            out += child.specs()
+        return out
+
     # -- getting keys ---------------------------------------------------------------------------
     def has(self, name: str) -> bool:
         """Is key ``name`` in the table."""
@@ -182,6 +258,8 @@ class Table:
 
     def text(self, name: str, default: Any = _MISSING, *, choices: Sequence[str] | None = None) -> str:
         """A string key (one of ``choices`` if given)."""
+        self._spec(name, default, "", ", ".join(choices) if choices is not None else "text")
+
         def convert(value: Any) -> str:
             if not isinstance(value, str):
                 raise ConfigurationError.out_of_range("value", value, "a string")
@@ -193,29 +271,40 @@ class Table:
     def integer(self, name: str, default: Any = _MISSING, *, low: int | None = None,
                 high: int | None = None, unit: str = "") -> int:
         """An integer key in ``low..high``."""
+        self._spec(name, default, unit, validate.integer_range(low, high))
         return self._typed(name, default, lambda v: validate.integer(v, "value", low=low, high=high, unit=unit))
 
     def number(self, name: str, default: Any = _MISSING) -> Fraction:
         """A number key, exactly (a TOML float is taken as the decimal it prints as)."""
+        self._spec(name, default, "", "a number")
         return self._typed(name, default, lambda v: validate.exact(v, "value"))
 
     def flag(self, name: str, default: Any = _MISSING) -> bool:
         """A true/false key."""
+        self._spec(name, default, "", "true, false")
         return self._typed(name, default, lambda v: validate.flag(v, "value"))
 
-    def time(self, name: str, default: Any = _MISSING) -> int:
-        """A time written with a unit (``"40 us"``) as ticks of the resolution; a bare integer is ticks."""
-        return self._typed(name, default, self.ticks)
+    def time(self, name: str, default: Any = _MISSING, *, hint: str = "ms") -> int:
+        """A time written with a unit (``"40 us"``) as ticks of the resolution (``hint``: the unit a bare
+        number is suggested with)."""
+        self._spec(name, default, "time", "a time with a unit, e.g. \"40 us\"")
+        return self._typed(name, default, lambda v: self.ticks(v, hint=hint))
 
-    def ticks(self, value: Any) -> int:
-        """Convert a time value (``"40 us"`` or integer ticks) to ticks."""
+    def ticks(self, value: Any, *, hint: str = "ms") -> int:
+        """Convert a time written with a unit (``"40 us"``) to ticks; a bare number other than 0 is refused."""
         if isinstance(value, str):
             return self.timebase.ticks(value, name="time")
-        return validate.integer(value, "time [ticks]", low=0, allowed="a time with a unit, e.g. '40 us'")
+        if isinstance(value, int | float) and not isinstance(value, bool) and value == 0:
+            return 0
+        shown = validate.shown(value) if isinstance(value, int | float) and not isinstance(value, bool) else None
+        hint_text = f"; did you mean \"{shown} {hint}\"?" if shown is not None else ""
+        raise ConfigurationError.out_of_range("time", value, f"a time with a unit, e.g. \"40 us\"{hint_text}")
 
     def file_path(self, name: str, base: Path, *, suffixes: Sequence[str] = ()) -> Path:
         """A file named by key ``name``, relative to ``base`` (the machine file's folder); it must exist."""
         text = self.text(name)
+        self.key_specs[name] = KeySpec(self.key(name), text, True, "", "a file, relative to the machine file"
+                                       + (" (" + ", ".join(suffixes) + ")" if suffixes else ""))
         path = (base / text).resolve()
         if not path.is_file():
             raise ConfigurationError(f"{self.file}: {self.key(name)}: file {path} does not exist"
@@ -249,6 +338,16 @@ class Table:
         for name in self.data:
             out.append((name, self.table(name)))
         return out
+
+    def only(self, known: Sequence[str], *, what: str) -> None:
+        """Refuse a key that is not one of ``known`` before any key is read (a misspelt key is named, not
+        reported as a missing one): ``what`` says what the keys are of (``the parameters of Bound``)."""
+        for name in self.data:
+            if name not in known:
+                close = difflib.get_close_matches(str(name), list(known), n=3)
+                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                raise ConfigurationError(f"{self.file}: {self.key(name)} is not a key here{hint} ({what}: "
+                                         f"{', '.join(known)})")
 
     def finish(self) -> None:
         """Refuse keys that nothing took, here and in every sub-table taken."""

@@ -6,7 +6,7 @@ figure                            meaning
 ``slots``, ``pulses``             planned slots, and pulses over every axis
 ``fill_commands``                 fill-buffer round trips the host made
 ``job_done_ms``                   when the last planned slot would end without underruns [ms]
-``job_s``                         from the start of the job's first slot to the end of its last, as run [s]
+``job_duration_s``                from the start of the job's first slot to the end of its last, as run [s]
 ``<axis>_peak_hz``                highest pulse rate of the axis: its largest slot count x 1000 [Hz]
 ``slots_at_limit``                slots in which some axis ran at the engine's limit (25 pulses on a 56E)
 ``min_buffer_level``              fewest slots queued at a slot start while the host still had slots to send
@@ -47,7 +47,8 @@ def declare_figures(run: Run, engine: PulseEngine, host: HostApp, watch: JobWatc
     run.figure("pulses", sum(abs(c) for slot in counts for c in slot))
     run.figure("fill_commands", lambda: len(host.fills))
     run.figure("job_done_ms", lambda: (host.t_buffer_mode or 0) / ms + len(counts), "ms")
-    run.figure("job_s", lambda: nan if watch.job_ticks is None else sim.timebase.seconds(watch.job_ticks), "s")
+    run.figure("job_duration_s", lambda: nan if watch.job_ticks is None else sim.timebase.seconds(watch.job_ticks),
+               "s")
     limit = engine.device.max_pulses_per_slot
     for train in engine.steps:
         axis = train.name.split(".")[-2]

@@ -77,7 +77,6 @@ class TrioFamily:
                     raise ConfigurationError.out_of_range("base", group, "a list of axis numbers, e.g. [2, 3]")
                 program.start(controller, base=tuple(controller.axis(a).number for a in group))
         sim = run.sim
-        run.figure("job_s", lambda: sim.timebase.seconds(sim.now), "s")
         for n, axis in controller.axes.items():
             if axis.step is not None:
                 step = axis.step
