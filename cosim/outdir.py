@@ -59,6 +59,9 @@ class OutputFolder:
         self.folder = Path(folder)
         if self.folder.exists() and not self.folder.is_dir():
             raise ConfigurationError(f"--out {self.folder} is a file, not a folder")
+        blocker = next((p for p in self.folder.parents if p.exists() and not p.is_dir()), None)
+        if blocker is not None:
+            raise ConfigurationError(f"--out {self.folder}: {blocker} is a file, not a folder")
         if not owned(self.folder):
             names = sorted(p.name for p in self.folder.iterdir())
             shown = ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")

@@ -414,6 +414,12 @@ def _first_error(result: Result, text: str, kind: str) -> None:
 def _end_time(sim: Simulation, until: str | int) -> int:
     if isinstance(until, int):
         return sim.timebase.check_ticks(until, name="until", minimum=1)
+    try:
+        float(until)
+    except ValueError:
+        pass
+    else:  # a bare number: a time needs its unit
+        raise ConfigurationError.out_of_range("until", until, f"a time with a unit: did you mean \"{until} s\"?")
     end = sim.ticks(until, name="until")
     if end <= 0:
         raise ConfigurationError.out_of_range("until", until, "a time > 0, e.g. '20 ms'")

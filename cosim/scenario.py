@@ -31,6 +31,7 @@ Example (ten lines)::
 from __future__ import annotations
 
 import ast
+import math
 import sys
 import traceback
 from collections.abc import Callable, Mapping
@@ -103,6 +104,8 @@ class Param:
                     raise ValueError(text)
             elif kind is float:
                 value = float(text)
+                if not math.isfinite(value):
+                    raise ValueError(text)
             else:
                 value = str(text)
         except ValueError:
@@ -384,8 +387,8 @@ def description(name_or_path: str | Path) -> str:
     """
     path = _path(name_or_path)
     try:
-        doc = ast.get_docstring(ast.parse(path.read_text(), str(path))) or ""
-    except SyntaxError:
+        doc = ast.get_docstring(ast.parse(path.read_bytes(), str(path))) or ""
+    except (SyntaxError, ValueError, OSError):
         return ""
     return doc.strip().splitlines()[0] if doc.strip() else ""
 
@@ -432,12 +435,21 @@ def _path(name_or_path: str | Path) -> Path:
 
 
 def _import(path: Path) -> ModuleType:
-    source = path.read_text()
+    try:
+        source = path.read_bytes()  # as bytes: Python reads a `# -*- coding: latin-1 -*-` line itself
+    except OSError as exc:
+        raise ConfigurationError(f"{path}: cannot read the scenario file ({exc.strerror or exc})") from None
     try:
         code = compile(source, str(path), "exec")
     except SyntaxError as exc:
+        if (exc.msg or "").startswith("(unicode error)"):
+            raise ScenarioError(f"{path}:{exc.lineno}: not UTF-8 text: {exc.msg.removeprefix('(unicode error) ')} "
+                                "(save the file as UTF-8, or name its encoding on its first line, e.g. "
+                                "# -*- coding: latin-1 -*-)") from None
         line = (exc.text or "").rstrip()
         raise ScenarioError(f"{path}:{exc.lineno}: syntax error: {exc.msg}\n    {line}") from None
+    except ValueError as exc:  # a NUL byte in the source
+        raise ScenarioError(f"{path}: not a Python scenario file ({exc})") from None
     module = ModuleType(f"cosim_scenario_{path.stem}")
     module.__file__ = str(path)
     sys.modules[module.__name__] = module  # dataclasses and pickling look modules up here

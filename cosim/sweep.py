@@ -85,7 +85,8 @@ def plan(scenario: str | Path, *, grid: Mapping[str, Sequence[Any]] | None = Non
     """
     if isinstance(samples, bool) or not isinstance(samples, int) or samples < 1:
         raise ConfigurationError.out_of_range("samples", samples, "an integer >= 1")
-    declared = {p.name: p for p in load(scenario).parameters}
+    script = load(scenario)
+    declared = {p.name: p for p in script.parameters}
     grid = dict(grid or {})
     samplers = {name: sampler(_param(declared, name), bounds) for name, bounds in (random or {}).items()}
     for name in grid:
@@ -100,7 +101,20 @@ def plan(scenario: str | Path, *, grid: Mapping[str, Sequence[Any]] | None = Non
             values[name] = draw(rng)
         run_seed = int(sequence.generate_state(1, dtype=np.uint32)[0])
         runs.append(RunSpec(index, run_seed, values))
+    checked: set[tuple[tuple[str, str], ...]] = set()
+    for spec in runs:  # every value against its declared range before the first run (not a NaN row after it)
+        key = tuple(sorted(spec.overrides.items()))
+        if key not in checked:
+            checked.add(key)
+            try:
+                script.resolve(spec.overrides)
+            except ConfigurationError as exc:
+                raise ConfigurationError(f"sweep run {spec.index} ({_shown_values(spec.overrides)}): {exc}") from None
     return runs
+
+
+def _shown_values(values: Mapping[str, str]) -> str:
+    return ", ".join(f"{name}={value}" for name, value in values.items()) or "the defaults"
 
 
 def _param(declared: Mapping[str, Param], name: str) -> Param:
@@ -328,6 +342,8 @@ def sweep(scenario: str | Path, runs: list[RunSpec], *, workers: int = 2, schedu
 
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
         raise ConfigurationError.out_of_range("workers", workers, "an integer >= 0")
+    if out is not None:  # refused before the first run, not after the last
+        _writable(Path(out))
     name = str(scenario)
     rows: list[dict[str, Any]] = []
     timing = {"startup_s": 0.0}
@@ -374,6 +390,18 @@ def _flatten(rows: list[dict[str, Any]]) -> tuple[dict[str, str], dict[str, str]
                 failed.append(key)
         row["failed"] = ", ".join(failed)
     return {key: check_name for check_name, key in keys.items()}, units
+
+
+def _writable(folder: Path) -> None:
+    """Make ``folder`` (and its parents), or say why it cannot be."""
+    blocker = next((p for p in (folder, *folder.parents) if p.exists() and not p.is_dir()), None)
+    if blocker is not None:
+        raise ConfigurationError(f"--out {folder}: {blocker} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigurationError(f"--out {folder}: cannot write there ({exc.strerror or exc}); choose a folder you "
+                                 "can write to") from None
 
 
 def write(table: Any, folder: Path, *, scenario: str, report: bool = True) -> None:

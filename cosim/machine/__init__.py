@@ -34,6 +34,7 @@ without running. See ``docs/machines.md`` for every key.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -57,7 +58,9 @@ class MachineFile(ScenarioFile):
 
     def resolve(self, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
         """The document with ``--set`` overrides applied (by dotted key or a unique trailing part)."""
-        return apply_overrides(self.document, dict(overrides or {}), file=self.path)
+        values = apply_overrides(self.document, dict(overrides or {}), file=self.path)
+        _finite(values, self.path)
+        return values
 
     def until_for(self, values: Mapping[str, Any]) -> str | int:
         """The end time the (overridden) document gives (checked: a time with a unit, naming the file)."""
@@ -88,6 +91,7 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
         if not program.is_file():
             raise ConfigurationError(f"program file {program} does not exist")
         document["program"] = [{"file": str(program.resolve())}]
+    _finite(document, path)
     machine = document.get("machine")
     if not isinstance(machine, dict):
         raise ConfigurationError(f"{path}: machine: the [machine] table is missing (it holds at least until = "
@@ -141,6 +145,18 @@ def _resolution(document: Mapping[str, Any], path: Path) -> Fraction:
     if ticks <= 0:
         raise ConfigurationError.out_of_range("machine.resolution", text, "> 0", where=str(path))
     return Fraction(ticks, 10**12)
+
+
+def _finite(data: Any, path: Path, key: str = "") -> None:
+    """Refuse ``nan`` and ``inf`` anywhere in a machine file: no key takes them (naming the file and key)."""
+    if isinstance(data, float) and not math.isfinite(data):
+        raise ConfigurationError.out_of_range(key, data, "a finite number", where=str(path))
+    if isinstance(data, dict):
+        for name, value in data.items():
+            _finite(value, path, f"{key}.{name}" if key else str(name))
+    elif isinstance(data, list):
+        for index, value in enumerate(data):
+            _finite(value, path, f"{key}[{index}]")
 
 
 def _leaves(data: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:

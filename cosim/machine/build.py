@@ -22,7 +22,7 @@ from cosim.couplings.laser import couple_laser
 from cosim.couplings.servo import couple_servo
 from cosim.couplings.stepper import couple_stepper
 from cosim.couplings.switches import couple_switches
-from cosim.errors import ConfigurationError
+from cosim.errors import ConfigurationError, FmuError
 from cosim.machine.checks import check_from_table, figure_from_table
 from cosim.machine.document import Table
 from cosim.machine.expect import declare_job, declare_travel, declare_warnings, signal_problem
@@ -105,11 +105,16 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
             path = (base / fmu).resolve()
             if path.suffix != ".fmu" or not path.is_file():
                 raise ConfigurationError(f"FMU file {path} does not exist (or is not an .fmu file)")
-            plant = run.plant(path, name=name, fmi_version=fmi, preset=preset, parameters=parameters)
+            source: str | Path = path
         else:
             if not isinstance(model, str):
                 raise ConfigurationError.out_of_range("value", model, "a bundled model name")
-            plant = run.plant(model, name=name, fmi_version=fmi, preset=preset, parameters=parameters)
+            source = model
+        try:
+            plant = run.plant(source, name=name, fmi_version=fmi, preset=preset, parameters=parameters)
+        except FmuError as exc:  # the FMU refused a start value: the machine file's, so a configuration error
+            raise ConfigurationError(f"{table.file}: {table.key('parameters')}: the FMU refused a start value: "
+                                     f"{exc}") from None
     for kind in COUPLINGS:
         if not table.has(kind):
             table.raw(kind, None)
