@@ -169,8 +169,8 @@ def test_the_progress_bar_waits_two_seconds_and_ends_with_its_line(monkeypatch: 
 def test_run_says_which_files_it_wrote(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["run", "laser_pwm", "--out", str(tmp_path / "out")]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
-    assert last == (f"results in {tmp_path / 'out'}/ (edges.parquet, pulses.parquet, result.json, segments.parquet, "
-                    "trace.gtkw, trace.vcd, trace_digital.vcd, trace_meta.json, values.parquet)")
+    assert last == (f"results in {tmp_path / 'out'}/ (console.txt, edges.parquet, pulses.parquet, result.json, "
+                    "segments.parquet, trace.gtkw, trace.vcd, trace_digital.vcd, trace_meta.json, values.parquet)")
     assert main(["run", "laser_pwm", "--out", str(tmp_path / "csv"), "--no-vcd", "--format", "csv"]) == 0
-    assert "(edges.csv, pulses.csv, result.json, segments.csv, trace_meta.json, trace_wide.csv, values.csv)" in \
-        capsys.readouterr().out
+    assert ("(console.txt, edges.csv, pulses.csv, result.json, segments.csv, trace_meta.json, trace_wide.csv, "
+            "values.csv)") in capsys.readouterr().out

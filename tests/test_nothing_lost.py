@@ -72,7 +72,7 @@ def test_an_unwritable_out_is_found_before_the_run(tmp_path: Path, capsys: pytes
     blocker = tmp_path / "a_file"
     blocker.write_text("")
     assert main(["run", str(_script(tmp_path, BLINK)), "--out", str(blocker / "sub")]) == 2
-    assert f"--out {blocker / 'sub'}: cannot write there" in capsys.readouterr().err
+    assert f"--out {blocker / 'sub'}: {blocker} is a file, not a folder" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(("signum", "name"), [(signal.SIGINT, "SIGINT"), (signal.SIGTERM, "SIGTERM")])
@@ -114,11 +114,15 @@ def test_a_figure_or_a_check_that_raises_is_an_error_entry_and_the_rest_is_kept(
     assert result.verdict == "ERROR" and (tmp_path / "out" / "trace.vcd").is_file()
     good, boom, misspelt = result.checks
     assert good["passed"] and good["checked"] == 1
-    assert boom["error"].endswith("check my custom check: custom check blew up")
+    raised = 1 + text.splitlines().index('            raise RuntimeError("custom check blew up")')
+    assert boom["error"] == f"{script}:{raised}: check my custom check: RuntimeError: custom check blew up"
     assert misspelt["error"].startswith(f"{script}:")  # the line that declared it
     assert "no signal named 'blink.gat' in the trace; did you mean blink.gate" in misspelt["error"]
     assert result.figures["good"] == {"value": 2.5, "unit": "s"}
-    assert result.figures["text"]["value"] is None and "ValueError" in result.figures["text"]["error"]
+    assert result.figures["text"]["value"] is None
+    declared = 1 + text.splitlines().index('    run.figure("text", lambda: "not a number")')
+    assert result.figures["text"]["error"] == (f"{script}:{declared}: figure text: TypeError: the value 'not a number' "
+                                               "is a str, not a number")
     assert "  figure text = (could not be evaluated: see the error)" in result.table().splitlines()
     assert json.loads((tmp_path / "out" / "result.json").read_text())["checks"][0]["passed"] is True
 
