@@ -60,11 +60,19 @@ def _folder_completion(action: argparse.Action) -> None:
 
 # -- run ------------------------------------------------------------------------------------------
 
+#: Program files ``cosim run PROGRAM --machine MACHINE.toml`` takes, by suffix: the family that runs them.
+PROGRAM_SUFFIXES = {".bas": "Trio BASIC", ".pmc": "PMAC", ".pmac": "PMAC", ".nc": "G-code (PoKeys)",
+                    ".ngc": "G-code (PoKeys)", ".gcode": "G-code (PoKeys)"}
+PROGRAM_KINDS = ("a Trio BASIC program (.bas), a PMAC program (.pmc, .pmac) or a G-code program (.nc, .ngc, "
+                 ".gcode)")
+
+
 def _args_run(parser: argparse.ArgumentParser) -> None:
-    _scenario_argument(parser, "bundled scenario name (see `cosim list`), a .py scenario script, a .toml machine "
-                               "file, or a program (.bas) to run on --machine")
+    _scenario_argument(parser, "bundled scenario name (see `cosim list`), a scenario script (.py), a machine file "
+                               f"(.toml), or {PROGRAM_KINDS} to run on --machine")
     parser.add_argument("--machine", type=Path, default=None, metavar="MACHINE.toml",
-                        help="the machine file a program given as SCENARIO runs on (its [[program]] list is replaced)")
+                        help="the machine file a program given as SCENARIO runs on (.bas on a Trio, .pmc/.pmac on a "
+                             "PMAC, .nc/.ngc/.gcode on a PoKeys machine); it replaces the file's [[program]] list")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
                         help="set a declared parameter, or a machine-file key by its dotted path or a unique "
                              "last part (repeatable; see `cosim params SCENARIO`)")
@@ -102,9 +110,10 @@ def _load(args: argparse.Namespace) -> object:
         from cosim.machine import load_machine
 
         return load_machine(machine, program=args.scenario)
-    if Path(args.scenario).suffix in (".bas", ".pmc", ".nc", ".ngc"):
-        raise ConfigurationError(f"{args.scenario} is a program: name the machine it runs on with "
-                                 f"--machine MACHINE.toml (see docs/machines.md)")
+    suffix = Path(args.scenario).suffix.lower()
+    if suffix in PROGRAM_SUFFIXES:
+        raise ConfigurationError(f"{args.scenario} is a {PROGRAM_SUFFIXES[suffix]} program: name the machine it runs "
+                                 "on with --machine MACHINE.toml (see docs/machines.md)")
     return load(args.scenario)
 
 
@@ -201,20 +210,52 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def _args_params(parser: argparse.ArgumentParser) -> None:
-    _scenario_argument(parser, "bundled scenario name or path to a .py script")
+    _scenario_argument(parser, "bundled scenario name, a .py script or a .toml machine file")
+    parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                        help="a machine file: set a key first (as for `cosim run`)")
 
 
 def cmd_params(args: argparse.Namespace) -> int:
     from cosim.catalog import load
+    from cosim.machine import MachineFile
 
     scenario = load(args.scenario)
     print(f"{scenario.name}: {scenario.description}\n(default end time {scenario.until})")
-    rows = [(p.name, repr(p.default), p.unit, p.allowed(), p.help) for p in scenario.parameters]
-    head = ("name", "default", "unit", "allowed", "help")
-    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(4)]
-    for row in [head, *rows]:
-        print("  ".join(f"{c:<{w}}" for c, w in zip(row[:4], widths, strict=True)) + "  " + row[4])
+    if isinstance(scenario, MachineFile):
+        from cosim.machine.check import machine_keys
+
+        specs = machine_keys(scenario, overrides=_parse_sets(args.overrides))
+        rows = [(s.key, _shorter(_toml(s.value) if s.given else f"({_toml(s.value)})" if s.value is not None
+                                 else "-"), s.unit, s.allowed) for s in specs]
+        print("(every key of the machine file, and in parentheses the defaults of keys it does not give; set any "
+              "with --set KEY=VALUE)")
+        _table(("key", "value", "unit", "allowed"), rows)
+        return EXIT_PASS
+    _table(("name", "default", "unit", "allowed", "help"),
+           [(p.name, repr(p.default), p.unit, p.allowed(), p.help) for p in scenario.parameters])
     return EXIT_PASS
+
+
+def _toml(value: object) -> str:
+    """A value as it is written in a machine file (``"2 s"``, ``true``, ``[1, 2]``)."""
+    import json
+
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, str | list | dict):
+        return json.dumps(value, default=str)
+    return str(value)
+
+
+def _shorter(text: str, width: int = 40) -> str:
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def _table(head: tuple[str, ...], rows: Sequence[tuple[str, ...]]) -> None:
+    """Columns padded to their widest cell (the last one is not padded)."""
+    widths = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head) - 1)]
+    for row in [head, *rows]:
+        print("  ".join(f"{c:<{w}}" for c, w in zip(row[:-1], widths, strict=True)) + "  " + row[-1])
 
 
 # -- FMUs -----------------------------------------------------------------------------------------
@@ -411,11 +452,12 @@ class Command:
 
 COMMANDS: tuple[Command, ...] = (
     Command("run", cmd_run, "run one scenario or machine file and check its timing", arguments=_args_run,
-            description="Run a bundled scenario (by name), your own script (a .py path) or a machine file (.toml; "
-                        "with --machine, a program on a machine), print the check table and write result.json, "
-                        "trace.vcd and tables.",
+            description="Run a bundled scenario (by name), your own scenario script (.py) or a machine file "
+                        f"(.toml), or, with --machine, {PROGRAM_KINDS} on a machine file's machine; print the "
+                        "check table and write result.json, console.txt, trace.vcd and tables.",
             epilog="examples: cosim run laser_pwm --set pwm_on=200; cosim run examples/pokeys_mill/mill.toml "
-                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml. "
+                   "--set controller.axis.x.max_speed_hz=12000; cosim run engrave.bas --machine engraver.toml; "
+                   "cosim run pocket.nc --machine router.toml; cosim run shear.pmc --machine shear.toml. "
                    + EPILOG),
     Command("check-machine", cmd_check_machine, "check a machine file: build the machine without running it",
             arguments=_args_check_machine,
@@ -431,8 +473,11 @@ COMMANDS: tuple[Command, ...] = (
                         "early return and event mode. See docs/export.md.",
             epilog="example: cosim export-fmu examples/trio_tn20_81/tn20_81.toml -o tn20_81.fmu"),
     Command("list", cmd_list, "list the bundled scenarios and example machines with their descriptions"),
-    Command("params", cmd_params, "show a scenario's parameters (name, default, unit, range, help)",
-            arguments=_args_params),
+    Command("params", cmd_params, "show a scenario's parameters or a machine file's keys (value, unit, allowed)",
+            arguments=_args_params,
+            description="A scenario (a bundled name or a .py script): its declared parameters with default, unit, "
+                        "allowed range and help. A machine file (.toml): every key it gives and the defaults of the "
+                        "keys it does not, with unit and allowed values (the machine is built, not run)."),
     Command("build-fmus", cmd_build, "build the plant FMUs (FMI 2.0 and 3.0); says what it built and where",
             arguments=_args_build,
             description="Build the plant FMUs that are missing or older than their sources (all with --force). "

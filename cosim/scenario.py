@@ -82,7 +82,8 @@ class Param:
     def allowed(self) -> str:
         """The allowed range as text."""
         if self.range is None:
-            return "any " + type(self.default).__name__
+            return {bool: "true, false", int: "any integer", float: "any number", str: "any text"}.get(
+                type(self.default), "any " + type(self.default).__name__)
         if isinstance(self.default, str):
             return ", ".join(map(str, self.range))
         low, high = self.range

@@ -174,3 +174,55 @@ def test_run_says_which_files_it_wrote(tmp_path: Path, capsys: pytest.CaptureFix
     assert main(["run", "laser_pwm", "--out", str(tmp_path / "csv"), "--no-vcd", "--format", "csv"]) == 0
     assert ("(console.txt, edges.csv, pulses.csv, result.json, segments.csv, trace_meta.json, trace_wide.csv, "
             "values.csv)") in capsys.readouterr().out
+
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+@pytest.mark.fmu
+def test_params_of_a_machine_file_give_units_allowed_values_and_defaults(tmp_path: Path,
+                                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """It used to say "any str" / "any int" for every key."""
+    assert main(["params", str(EXAMPLES / "pokeys_mill" / "mill.toml")]) == 0
+    rows = {line.split()[0]: " ".join(line.split()[1:]) for line in capsys.readouterr().out.splitlines()[4:]}
+    assert rows["machine.until"] == '"2.5 s" time a time with a unit, e.g. "2 s"'
+    assert rows["controller.model"] == '"56E" 56E, 56U, 57E, 57CNC'
+    assert rows["controller.axis.x.max_speed_hz"] == "20000 Hz > 0, at most the model's rate (25 kHz on a 56E)"
+    assert rows["host.prefill"] == "64 1..128"
+    assert rows["check[0].window"] == '"1 ms" time a time with a unit'
+    assert rows["job.check"] == "(true) true, false"  # a default: the file does not give it
+    assert main(["params", str(EXAMPLES / "trio_engraver" / "engraver.toml")]) == 0
+    rows = {line.split()[0]: " ".join(line.split()[1:]) for line in capsys.readouterr().out.splitlines()[4:]}
+    assert rows["controller.servo_period_us"] == "1000 us 250, 500, 1000, 2000 (SERVO_PERIOD)"
+    assert rows["plant.laser.record.period"] == '"100 us" time a time with a unit, e.g. "40 us"'
+    assert rows["plant.stage_x.stepper.axis"] == "3 >= 0"
+    (tmp_path / "p.bas").write_text("WA(10)\n")
+    (tmp_path / "m.toml").write_text('[machine]\nuntil = "1 s"\n[controller]\nfamily = "trio"\n[controller.axis.3]\n'
+                                     'UNITS = 16\n[[program]]\nfile = "p.bas"\n[plant.laser]\nmodel = "Laser"\n'
+                                     'parameters = { tau_rise = 5e-5 }\nlaser = { axis = 3 }\n')
+    assert main(["params", str(tmp_path / "m.toml")]) == 0
+    rows = {line.split()[0]: " ".join(line.split()[1:]) for line in capsys.readouterr().out.splitlines()[4:]}
+    assert rows["controller.axis.3.UNITS"] == "16 counts/unit > 0 (default 1): step pulses per user unit"
+    assert rows["plant.laser.parameters.tau_rise"] == "5e-05 s any finite number (FMU parameter)"  # its unit, its range
+
+
+def test_params_of_a_scenario_name_the_kind_of_an_unbounded_parameter(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["params", "trio_example"]) == 0
+    assert "laser    True     \n" not in capsys.readouterr().out
+    from cosim.scenario import Param
+
+    assert [Param("n", 1).allowed(), Param("x", 0.5).allowed(), Param("s", "a").allowed(),
+            Param("f", True).allowed()] == ["any integer", "any number", "any text", "true, false"]
+
+
+@pytest.mark.parametrize(("program", "kind"), [("job.bas", "Trio BASIC"), ("shear.pmc", "PMAC"), ("a.pmac", "PMAC"),
+                                               ("pocket.nc", "G-code (PoKeys)"), ("p.ngc", "G-code (PoKeys)"),
+                                               ("p.gcode", "G-code (PoKeys)")])
+def test_run_help_names_every_kind_of_program_file(program: str, kind: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """`cosim run --help` used to name only .bas programs."""
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    shown = " ".join(capsys.readouterr().out.split())
+    assert all(s in shown for s in (".py", ".toml", ".bas", ".pmc, .pmac", ".nc, .ngc, .gcode"))
+    assert main(["run", program]) == 2
+    assert f"{program} is a {kind} program: name the machine it runs on with --machine" in capsys.readouterr().err

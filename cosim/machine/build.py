@@ -90,6 +90,8 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
                                  f"with a letter (it prefixes the plant's signals); got {name!r}")
     model = table.raw("model", None)
     fmu = table.raw("fmu", None)
+    table.describe("model", allowed="Laser, Stepper, Servo, Conveyor (a bundled plant)")
+    table.describe("fmu", allowed="the path of a co-simulation FMU, relative to the machine file")
     if (model is None) == (fmu is None):
         raise ConfigurationError(f"{table.file}: {table.path}: give either model (a bundled plant: Laser, Stepper, "
                                  "Servo, Conveyor) or fmu (the path of your own co-simulation FMU)")

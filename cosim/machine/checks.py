@@ -31,6 +31,7 @@ signal reduced to a number::
 from __future__ import annotations
 
 import dataclasses
+import types
 import typing
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -51,7 +52,7 @@ CHECKS: dict[str, type[Check]] = {name: obj for name in checks_module.__all__
 
 #: Parameters of each check that are times [ticks] (written with a unit in a machine file).
 TIME_FIELDS: dict[str, tuple[str, ...]] = {
-    "DirectionSetup": ("setup",),
+    "DirectionSetup": ("setup", "active_delay"),
     "Duration": ("min", "max", "equals", "tol"),
     "EdgeAtPosition": ("tol_time", "times"),
     "IntervalsBelow": ("max_duration", "start", "until"),
@@ -89,10 +90,28 @@ def check_from_table(table: Table) -> Check:
             table.raw(field.name, None)  # mark as a known key of this table
             continue
         value = table.raw(field.name)
+        table.describe(field.name, unit="time" if field.name in times else "",
+                       allowed="a time with a unit" if field.name in times else _annotation(hints, field.name))
         with table.at(field.name):
             kwargs[field.name] = _convert(value, field.name, kind, times, table)
     with table.at():
         return cls(**kwargs)
+
+
+def _annotation(hints: Mapping[str, Any], name: str) -> str:
+    """A check parameter's type as a user reads it (``int | None`` -> ``int (optional)``)."""
+    hint = hints.get(name)
+    if hint is None:
+        return ""
+    args = [a for a in typing.get_args(hint) if a is not type(None)]
+    def named(kind: Any) -> str:
+        if typing.get_args(kind):
+            return str(kind).replace("typing.", "").replace("collections.abc.", "")
+        return str(getattr(kind, "__name__", kind))
+
+    text = " or ".join(named(a) for a in args) if args and typing.get_origin(hint) in (typing.Union, types.UnionType) \
+        else named(hint)
+    return text + (" (optional)" if _optional(hint) else "")
 
 
 def _convert(value: Any, name: str, kind: str, times: tuple[str, ...], table: Table) -> Any:

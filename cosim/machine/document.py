@@ -225,8 +225,9 @@ class Table:
         self.key_specs.setdefault(name, KeySpec(self.key(name), value, given, unit, allowed))
 
     def describe(self, name: str, *, unit: str = "", allowed: str = "") -> None:
-        """Say what key ``name`` takes when it is read with :meth:`raw` and checked elsewhere."""
-        self.key_specs[name] = KeySpec(self.key(name), self.data.get(name), name in self.data, unit, allowed)
+        """Say what key ``name`` takes (if given here): a key read with :meth:`raw` and checked elsewhere."""
+        if name in self.data:
+            self.key_specs[name] = KeySpec(self.key(name), self.data[name], True, unit, allowed)
 
     def specs(self) -> list[KeySpec]:
         """What every key read here and in the sub-tables takes, in the order they were read."""
