@@ -13,7 +13,6 @@ from cosim import rigs
 from cosim.controllers.pmac.ect import pmac_default_table
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove, compile_items
-from cosim.controllers.pmac.units import IX94_DEFAULT, IX94_MAX
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
@@ -37,7 +36,7 @@ def test_ix94_at_max_with_smoothly_varying_master_gives_no_slip(sim: Simulation)
     """
     belt = IdealConveyor(sim, speed_counts_per_ms=32,
                             phases=[(20_000_000, Fraction(16, 5)), (20_000_000, Fraction(-14, 5))])
-    rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=IX94_MAX)
+    rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=8_388_607)  # Ix94 at its maximum
     clock = rig.pmac.clock
     rig.cs.run_program([MOVE])
     rows = record_each_cycle(sim, clock, lambda k, t: (rig.motor.cmd, rig.pmac.table.entry_at(0x3501).position,  # type: ignore[union-attr]
@@ -114,7 +113,7 @@ def test_host_percent_slews_at_ix94_per_cycle(sim: Simulation) -> None:
     """
     pmac = Pmac(sim)
     cs = pmac.coordinate_system(1)
-    assert cs.ix94 == IX94_DEFAULT
+    assert cs.ix94 == 1644  # PSRM p.124: Ix94 default 1644
     pmac.command_percent(1, 0)
     rows = record_each_cycle(sim, pmac.clock, lambda k, t: cs.actual, cycles=2300)
 
@@ -259,7 +258,7 @@ def test_ix93_1833_selects_the_default_pmac_table_time_base(sim: Simulation) -> 
     pmac = Pmac(sim, i10=2**21, table=pmac_default_table(0xC000, 2048))
     pmac.add_channel(0xC000, belt)
     pmac.set_ivar(193, 1833)
-    pmac.set_ivar(194, IX94_MAX)
+    pmac.set_ivar(194, 8_388_607)  # the largest Ix94 (PSRM p.124: range 0..8,388,607)
     cs = pmac.coordinate_system(1)
     assert cs.external and cs.describe_source() == "$0729 (external time base)"
     pmac.start()

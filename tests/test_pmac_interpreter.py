@@ -15,7 +15,6 @@ from cycle_probe import record_each_cycle
 from cosim import rigs
 from cosim.controllers.pmac import Pmac
 from cosim.controllers.pmac.motion import Delay, Dwell, LinearMove, Move
-from cosim.controllers.pmac.units import IX94_MAX
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
@@ -39,7 +38,7 @@ def _follow(sim: Simulation, *, text: bool) -> tuple[list[Fraction], rigs.Rig]: 
     """A slave under external time base from a master that speeds up and slows down; X each cycle."""
     ms = sim.ticks("1 ms")
     belt = IdealConveyor(sim, speed_counts_per_ms=48, phases=[(30 * ms, Fraction(1, 2)), (30 * ms, Fraction(-3, 4))])
-    rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=IX94_MAX)
+    rig = rigs.external_time_base(sim, belt, scale_factor=2048, ix94=8_388_607)  # Ix94 at its maximum
     if text:
         rig.pmac.load(PROGRAM, source="follow.pmc")
         rig.pmac.command("&1 B1 R")

@@ -22,19 +22,23 @@ from __future__ import annotations
 
 import random
 import socket
-import time
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from cosim.controllers.pokeys import SLOT_NS, PulseEngine
+from cosim.controllers.pokeys import PulseEngine
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
 from cosim.pokeys_device.packets import build_large_fill, build_request
 from cosim.pokeys_device.rig import VirtualPoKeys
 from cosim.pokeys_device.server import BackgroundServer, DeviceServer
 
+#: The pulse engine's time slot: "1 millisecond time slots" (PoKeys pulse engine documentation).
+SLOT_NS = 1_000_000
+
 MUTANTS = 19
+#: A reply that has not come after this long is a hang, even on a machine loaded with other work [s].
+HANG_S = 30.0
 BATCHES_PER_MODEL = 2_500
 SOCKET_PACKETS = 1_500
 
@@ -170,9 +174,8 @@ def fuzz_in_process(model: str) -> int:
 
 
 def test_100k_random_and_mutated_packets_in_process() -> None:
-    started = time.monotonic()
+    # how long it takes is measured in bench/bench_pokeys_device_fuzz.py (process CPU time), not asserted here
     assert fuzz_in_process("56E") + fuzz_in_process("57E") >= 100_000
-    assert time.monotonic() - started < 60  # no hang
 
 
 def test_fuzzed_packets_through_the_udp_socket_then_a_correct_status() -> None:
@@ -187,16 +190,14 @@ def test_fuzzed_packets_through_the_udp_socket_then_a_correct_status() -> None:
         def send(packet: bytes) -> None:
             sock.sendto(packet, address)
             if expected_reply(packet) is not None:
-                sock.settimeout(1.0)
+                sock.settimeout(HANG_S)
                 reply, _ = sock.recvfrom(2048)
                 check_reply(packet, reply)
 
-        started = time.monotonic()
         send()
         sock.sendto(build_request(0x85, 0x00, 0x21, request_id=0xEE), address)
-        sock.settimeout(1.0)
+        sock.settimeout(HANG_S)
         reply, _ = sock.recvfrom(2048)
         assert (reply[0], reply[1], reply[6], reply[63]) == (0xAA, 0x85, 0xEE, 0x21 + 0x5A)
-        assert time.monotonic() - started < 20
     assert rig.device.log.counts["internal_error"] == 0
     assert rig.pacer.report().slots > 0

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine, Status
+from cosim.controllers.pokeys import EngineConfig, PulseEngine, Status
 from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
@@ -27,6 +27,9 @@ from cosim.pokeys_device.layouts import (
 )
 from cosim.pokeys_device.packets import build_request
 from cosim.testing.pokeys_client import DirectClient
+
+#: The pulse engine's time slot: "1 millisecond time slots" (PoKeys pulse engine documentation).
+SLOT_NS = 1_000_000
 
 
 def make(sim: Simulation, model: str) -> tuple[PulseEngine, Device, DirectClient]:

@@ -12,10 +12,12 @@ from __future__ import annotations
 from collections.abc import Generator
 from typing import Any
 
-from cosim.controllers.pokeys import SLOT_NS
 from cosim.kernel import Simulation
 from cosim.pokeys_device.realtime import RealtimePacer
 from cosim.timebase import Priority
+
+#: The pulse engine's time slot: "1 millisecond time slots" (PoKeys pulse engine documentation).
+SLOT_NS = 1_000_000
 
 
 class FakeClock:

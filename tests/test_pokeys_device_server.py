@@ -18,7 +18,7 @@ from contextlib import contextmanager
 
 import pytest
 
-from cosim.controllers.pokeys import SLOT_NS, PulseEngine
+from cosim.controllers.pokeys import PulseEngine
 from cosim.couplings.ideal_axis import PositionSwitch
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
@@ -28,6 +28,9 @@ from cosim.pokeys_device.packets import build_request
 from cosim.pokeys_device.rig import VirtualPoKeys, Wiring
 from cosim.pokeys_device.server import BackgroundServer, DeviceServer
 from cosim.testing.pokeys_client import PoKeysClient, discover
+
+#: The pulse engine's time slot: "1 millisecond time slots" (PoKeys pulse engine documentation).
+SLOT_NS = 1_000_000
 
 AXIS = AxisRecord(config=CFG_ENABLED, max_speed=25.0, accel=0.1, decel=0.1)
 POLL_S = 0.003

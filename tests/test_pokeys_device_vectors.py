@@ -18,10 +18,13 @@ from __future__ import annotations
 import pytest
 from pokeys_fake_engine import FakeEngine
 
-from cosim.controllers.pokeys import SLOT_NS, EngineConfig, PulseEngine
+from cosim.controllers.pokeys import EngineConfig, PulseEngine
 from cosim.kernel import Simulation
 from cosim.pokeys_device import Device, DeviceIdentity, PulseEngineAdapter
 from cosim.pokeys_device.packets import build_large_fill, checksum, encode_entries, from_hexdump
+
+#: The pulse engine's time slot: "1 millisecond time slots" (PoKeys pulse engine documentation).
+SLOT_NS = 1_000_000
 
 V1_REQUEST = "00: BB 00 00 00 00 00 01 BC"
 V1_REPLY = "00: AA 00 4E 9B 20 3C 01 F0"

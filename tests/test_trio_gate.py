@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
-from cosim.controllers.trio.params import FIFO_DEPTH
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.timebase import Priority
@@ -134,13 +133,13 @@ def test_fifo_holds_256_positions_and_a_load_that_does_not_fit_waits(sim: Simula
     fifo_waiting   4 ________________________________ 0
     """
     _trio, p = gated_axis(sim, units=1, speed=1000)
-    p.table(0, *range(FIFO_DEPTH + 4))
+    p.table(0, *range(260))  # TN20-81: "The FIFO is up to 256 positions deep": 256 + 4 positions
     log: list[int] = []
 
     def job() -> Generator[Any, Any, None]:
-        yield p.pwm_control(3, 1, ON, 0, FIFO_DEPTH - 1)
+        yield p.pwm_control(3, 1, ON, 0, 255)  # TABLE(0..255): 256 positions, a full FIFO
         log.append(sim.now)
-        waiting = p.pwm_control(3, 1, ON, FIFO_DEPTH, FIFO_DEPTH + 3)
+        waiting = p.pwm_control(3, 1, ON, 256, 259)  # 4 more: they wait
         yield p.move(300)
         assert not waiting.triggered
         yield waiting
@@ -152,9 +151,9 @@ def test_fifo_holds_256_positions_and_a_load_that_does_not_fit_waits(sim: Simula
     assert log == [0, t_loaded]
     t_w, v_w = sim.trace.edges("trio.axis3.fifo_waiting")
     assert list(zip(t_w.tolist(), v_w.tolist(), strict=True)) == [(0, 0), (0, 4), (t_loaded, 0)]
-    assert sim.trace.value_at("trio.axis3.fifo_level", t_fire4) == FIFO_DEPTH - 4
-    assert sim.trace.value_at("trio.axis3.fifo_level", t_loaded) == FIFO_DEPTH
-    assert len(gate_edges(sim)) == FIFO_DEPTH + 4
+    assert sim.trace.value_at("trio.axis3.fifo_level", t_fire4) == 252
+    assert sim.trace.value_at("trio.axis3.fifo_level", t_loaded) == 256
+    assert len(gate_edges(sim)) == 260
 
 
 def test_empty_fifo_closes_the_gate_and_gating_off_opens_it_while_pwm_is_on(sim: Simulation) -> None:

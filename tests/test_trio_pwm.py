@@ -11,14 +11,7 @@ import pytest
 from trio_rigs import laser_axis
 
 from cosim.controllers.trio import OFF, ON, TrioController, TrioProcess
-from cosim.controllers.trio.pwm import (
-    SpeedLink,
-    carrier_edges,
-    linked_mark,
-    output_waveform,
-    pwm_frequency_hz,
-    rising_edges,
-)
+from cosim.controllers.trio.pwm import SpeedLink, carrier_edges, linked_mark
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.timebase import Priority
@@ -35,12 +28,9 @@ def test_pwm_cycle_sets_the_frequency_of_the_20mhz_generator(sim: Simulation, cy
     """
     laser_axis(sim, cycle=cycle, mark=cycle // 4)
     sim.run(until=1 * MS)
-    t, level = output_waveform(sim.trace, 3, 0, 1 * MS)
-    rises = rising_edges(t, level)
-    assert pwm_frequency_hz(cycle) == frequency_hz
-    assert np.diff(rises).tolist() == [period_ns] * (rises.size - 1)
-    assert rises.size == 1 * MS // period_ns - 1  # the first period starts high at t = 0
-    highs = t[1:][level[1:] == 0] - t[:-1][level[:-1] == 1][: (level[1:] == 0).sum()]
+    rises, highs = sim.trace.pulse_widths("trio.axis3.pwm_out")  # the recorded output pin
+    assert np.diff(rises).tolist() == [period_ns] * (rises.size - 1) and 10**9 // period_ns == frequency_hz
+    assert rises.size == 1 * MS // period_ns  # the first period starts high at t = 0
     assert set(highs.tolist()) == {cycle // 4 * 50}
 
 
@@ -48,14 +38,14 @@ def test_pwm_cycle_sets_the_frequency_of_the_20mhz_generator(sim: Simulation, cy
 def test_mark_at_or_above_cycle_is_continuously_on(sim: Simulation, cycle: int, mark: int) -> None:
     laser_axis(sim, cycle=cycle, mark=mark)
     sim.run(until=1 * MS)
-    t, level = output_waveform(sim.trace, 3, 0, 1 * MS)
-    assert t.tolist() == [0] and level.tolist() == [1]
+    rises, highs = sim.trace.pulse_widths("trio.axis3.pwm_out")
+    assert rises.tolist() == [0] and highs.tolist() == [1 * MS]  # one pulse, high to the end of the run
 
 
 def test_mark_zero_is_off(sim: Simulation) -> None:
     laser_axis(sim, cycle=1000, mark=0)
     sim.run(until=1 * MS)
-    assert output_waveform(sim.trace, 3, 0, 1 * MS)[1].tolist() == [0]
+    assert sim.trace.pulse_widths("trio.axis3.pwm_out")[0].size == 0  # the pin never rises
 
 
 def test_wdog_off_stops_the_output_at_once(sim: Simulation) -> None:
@@ -68,9 +58,9 @@ def test_wdog_off_stops_the_output_at_once(sim: Simulation) -> None:
     t_off = 300_017
     sim.call_at(t_off, Priority.HOST, lambda: p.set("WDOG", OFF))
     sim.run(until=1 * MS)
-    t, level = output_waveform(sim.trace, 3, 0, 1 * MS)
-    assert t[-1] == t_off and level[-1] == 0
-    assert t[-2] == 300_000 and level[-2] == 1  # the period that began at 300 us was high
+    rises, highs = sim.trace.pulse_widths("trio.axis3.pwm_out")
+    assert rises[-1] + highs[-1] == t_off  # the pulse that rose at 300 us falls at t_off, 17 ns later
+    assert (rises[-2:].tolist(), highs[-2:].tolist()) == ([250_000, 300_000], [20_000, 17])
     assert sim.trace.edges("trio.wdog")[0].tolist() == [0, 0, t_off]
 
 
@@ -97,8 +87,8 @@ def test_new_pwm_cycle_restarts_the_carrier_at_the_next_clock_edge(sim: Simulati
     sim.call_at(123_456, Priority.HOST, lambda: p.set("PWM_CYCLE", 200))
     sim.run(until=200_000)
     assert sim.trace.value_at("trio.axis3.pwm_phase", 150_000) == 2470  # ceil(123456 / 50)
-    t, level = output_waveform(sim.trace, 3, 0, 200_000)
-    assert rising_edges(t, level)[:3].tolist() == [50_000, 100_000, 123_500]
+    rises, _ = sim.trace.pulse_widths("trio.axis3.pwm_out")
+    assert rises[:5].tolist() == [0, 50_000, 100_000, 123_500, 133_500]  # 1000 clocks, then 200 from 123.5 us
 
 
 def test_linked_mark_formula_and_limit() -> None:

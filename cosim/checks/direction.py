@@ -15,6 +15,7 @@ import numpy as np
 from cosim import validate
 from cosim.checks.base import TICKS, Check, Clock, Findings, fmt, pulse_chunks, record_chunks
 from cosim.checks.result import MAX_REPORTED, Violation
+from cosim.errors import ConfigurationError
 from cosim.tracecursor import Held
 
 if TYPE_CHECKING:
@@ -38,6 +39,11 @@ class DirectionSetup(Check):
     active_delay : int
         Ticks from a recorded pulse to its active edge, where the drive counts it (a Trio step
         output: the step pulse width); the set-up is measured to the active edge. Default 0.
+    trailing : bool
+        The drive counts each pulse at its trailing edge, as recorded: the pulse plus the width the
+        trace declares for the train (a Trio step output, whose falling edge is the active one), in
+        place of ``active_delay``. The check then follows the recorded width, not a number given
+        for it.
 
     Notes
     -----
@@ -59,8 +65,11 @@ class DirectionSetup(Check):
     setup: int
     positive_level: int = 1
     active_delay: int = 0
+    trailing: bool = False
 
     def __post_init__(self) -> None:
+        if self.trailing and self.active_delay:
+            raise ConfigurationError(f"{self.where}: give active_delay or trailing, not both")
         validate.integer(self.setup, "setup", low=0, unit="ticks", kind=TICKS, where=self.where)
         validate.integer(self.active_delay, "active_delay", low=0, unit="ticks", kind=TICKS, where=self.where)
         validate.integer(self.positive_level, "positive_level", low=0, high=1, allowed="0, 1", kind="an integer",
@@ -78,8 +87,13 @@ class DirectionSetup(Check):
                                                 f"(level {self.positive_level} = dir 1)")
         shortest: int | None = None
         setup_violations = mismatches = 0
+        delay = self.active_delay
+        if self.trailing:
+            info = trace.info.get(self.step)
+            delay = info.pulse_width if info is not None else 0
+            found.description += f" (active edge: the trailing one, {fmt(clock.ns(delay))} ns after the leading)"
         for recorded, d in pulse_chunks(trace, self.step, self):
-            t = recorded + self.active_delay
+            t = recorded + delay
             value, defined, changed_at, changed = held.at(t)
             undefined = ~defined
             level = (value != 0).astype(np.int8)

@@ -67,8 +67,8 @@ def scenario(run: Run) -> None:
     run.check(ValueAt("trio.axis3.pwm_mark", None, 400, name="PWM_MARK 400"))
     run.check(ValueAt("trio.wdog", None, 1, name="WDOG on"))
     run.check(ValueAt("trio.axis3.dpos", None, 0, name="the axis is back at 0"))
-    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", trio.setup_ticks,
-                             active_delay=trio.pulse_width_ticks,
+    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", sim.ticks("100 ns"),
+                             trailing=True,  # TRM 8-165: the falling edge is the active one
                              name="axis 3: direction steady before the active edge of every step pulse"))
     run.figure("late_positions", lambda: len(trio.gate(3).late))
     run.figure("step_pulses", lambda: int(sim.trace.segments("trio.axis3.step")["count"].sum()))

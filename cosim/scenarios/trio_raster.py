@@ -127,8 +127,8 @@ def check_direction_setup(run: Run, trio: TrioController, job: RasterJob) -> Non
     """The direction outputs of the raster axes (Y moves only between lines) are steady before the active edge
     of every step pulse."""
     for a in (3, 2) if job.lines > 1 else (3,):
-        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", trio.setup_ticks,
-                                 active_delay=trio.pulse_width_ticks,
+        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", run.sim.ticks("100 ns"),
+                                 trailing=True,  # TRM 8-165: the falling edge is the active one
                                  name=f"axis {a}: direction steady before the active edge of every step pulse"))
 
 

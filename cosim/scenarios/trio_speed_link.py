@@ -136,8 +136,8 @@ def scenario(run: Run) -> None:
                                     "matches cruise (link)" if p.link else "exceeds cruise (no link)")))
     run.check(Bound("trio.axis2.dpos", lower=0, upper=40, name="the path stays inside the triangle (x)"))
     for a in (2, 3):
-        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", trio.setup_ticks,
-                                 active_delay=trio.pulse_width_ticks,
+        run.check(DirectionSetup(f"trio.axis{a}.step", f"trio.axis{a}.dir", sim.ticks("100 ns"),
+                                 trailing=True,  # TRM 8-165: the falling edge is the active one
                                  name=f"axis {a}: direction steady before the active edge of every step pulse"))
     run.figure("energy_per_mm_J", lambda: energy_per_mm(sim.trace, fixed_mark=None, period=period), "J/mm")
     run.figure("energy_per_mm_fixed_mark_J", lambda: energy_per_mm(sim.trace, fixed_mark=p.limit, period=period),

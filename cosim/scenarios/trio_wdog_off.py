@@ -71,8 +71,8 @@ def scenario(run: Run) -> None:
     run.check(ValueAt("trio.axis3.dpos", None, 200, name="the axis runs on to 200 mm"))
     run.check(EdgeAtPosition("trio.axis3.gate", "trio.axis3.step", [(20 * UNITS + 1, 1), (180 * UNITS + 1, 0)],
                              tol_counts=0, name="the gate still switches at 20 and 180 mm"))
-    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", trio.setup_ticks,
-                             active_delay=trio.pulse_width_ticks,
+    run.check(DirectionSetup("trio.axis3.step", "trio.axis3.dir", sim.ticks("100 ns"),
+                             trailing=True,  # TRM 8-165: the falling edge is the active one
                              name="axis 3: direction steady before the active edge of every step pulse"))
     if p.laser:
         preset = load_preset(PRESET)
