@@ -387,7 +387,7 @@ def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
         declared_at = run.figure_declared.get(name)
         try:
             number = value() if callable(value) else value
-            result.figures[name] = {"value": _number(number, name), "unit": unit}
+            result.figures[name] = {"value": _number(number), "unit": unit}
         except Exception as exc:
             place = user_line(exc, scenario.path) or (f"{declared_at}: " if declared_at else "")
             text = place + f"figure {name}: {type(exc).__name__}: {exc}"
@@ -395,11 +395,11 @@ def _evaluate(run: Run, result: Result, scenario: ScenarioFile) -> None:
             _first_error(result, text, "script")
 
 
-def _number(value: object, name: str) -> float:
+def _number(value: object) -> float:
     """A figure's value as a float; a value that is not a number is refused naming it (not float('abc'))."""
-    if isinstance(value, bool) or (not isinstance(value, int | float) and not hasattr(value, "__float__")):
+    if not isinstance(value, int | float) and not hasattr(value, "__float__"):
         raise TypeError(f"the value {value!r} is a {type(value).__name__}, not a number")
-    return float(value)  # type: ignore[arg-type]
+    return float(value)
 
 
 def _label(spec: object) -> str:
