@@ -181,6 +181,8 @@ def test_a_trio_job_s_is_when_its_processes_stopped_not_the_runs_end(tmp_path: P
     result = run_scenario(load_machine(tmp_path / "m.toml"))
     assert result.verdict == "PASS", result.table()
     assert result.figures["job_s"]["value"] == 2.084
+    table = result.table().splitlines()  # the PRINT line, with its time, in the terminal table too
+    assert table[table.index("  console (1 line, all in console.txt):") + 1].startswith("    2.084 s  [trio.")
     (tmp_path / "wait.bas").write_text("WA(4000)\n")  # still waiting when the run ends
     late = run_scenario(load_machine(tmp_path / "m.toml"))
     assert late.verdict == "FAIL" and math.isnan(late.figures["job_s"]["value"])

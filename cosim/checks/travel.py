@@ -89,7 +89,7 @@ class Travel(Check):
             lowest, highest = min(lowest, float(position.min())), max(highest, float(position.max()))
             side = np.where(position > bounds[1], 1, np.where(position < bounds[0], -1, 0))
             starts = _run_starts(side, previous)
-            ends = [*starts[1:].tolist(), side.size]
+            ends = [*starts[1:].tolist(), side.size] if starts.size else []
             head = int(starts[0]) if starts.size else side.size
             if excursion is not None and head:  # the excursion goes on into this chunk
                 excursion[1] = _farther(excursion[1], position[:head], excursion[2])
