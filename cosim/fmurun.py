@@ -7,7 +7,7 @@ recorded on a grid (start, start + step, ... and the end), written as the usual 
 
 Names. The trace's scheme is lower case (``<device>.<signal>``, each part ``[a-z0-9_]``), FMU
 variable names are not: :func:`trace_names` maps them one to one (it never gives two variables one
-signal), and the run keeps the mapping (``trace_meta.json``: ``fmu_variables``, trace name ->
+signal), and the run keeps the mapping (``trace_meta.json``: ``meta.fmu_variables``, trace name ->
 FMU name) and writes ``outputs.csv`` with the FMU's names as they are.
 """
 
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import csv
 import re
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -94,7 +94,8 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
                   t_start=t_start, end=end, period=period, table=table, validate=validate, notes=notes, out=out,
                   formats=formats, progress=progress)
     if out is not None:
-        write_outputs_csv(Path(out), names, timebase=timebase)
+        whole = {name for name, var in variables.items() if not var.kind.is_float}
+        write_outputs_csv(Path(out), names, timebase=timebase, integers=whole)
     return result
 
 
@@ -199,10 +200,13 @@ def _run(path: Path, *, device: str, values: dict[str, Any], sets: Mapping[str, 
     return run_scenario(scenario_file, until=end, out=out, formats=formats, progress=progress)
 
 
-def write_outputs_csv(out: Path, names: Mapping[str, str], *, timebase: Any) -> Path | None:
+def write_outputs_csv(out: Path, names: Mapping[str, str], *, timebase: Any,
+                      integers: Collection[str] = ()) -> Path | None:
     """``outputs.csv``: time [s] and every recorded output on the grid, headed by the FMU's own names.
 
-    Read back from the run's trace files; None if the run wrote none (it failed before recording).
+    Read back from the run's trace files; reals as Python writes them (``repr``, exact), the
+    ``integers`` (integer, Boolean and enumeration outputs) as whole numbers. None if the run
+    wrote no trace (it failed before recording).
     """
     from cosim.export import read_trace
 
@@ -215,10 +219,14 @@ def write_outputs_csv(out: Path, names: Mapping[str, str], *, timebase: Any) -> 
         return None
     series = [trace.edges(name) for _, name in columns]
     times = series[0][0]
+    if any(t.tolist() != times.tolist() for t, _ in series):
+        return None  # not one grid (samples at events too): the trace files hold everything
+    shown = [(lambda x: str(int(x))) if variable in integers else (lambda x: repr(float(x))) for variable, _ in columns]
     target = out / "outputs.csv"
     with target.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle)
         writer.writerow(["time", *(variable for variable, _ in columns)])
         for row, t in enumerate(times.tolist()):
-            writer.writerow([repr(timebase.seconds(t)), *(repr(float(values[row])) for _, values in series)])
+            writer.writerow([repr(timebase.seconds(t)),
+                             *(show(values[row]) for show, (_, values) in zip(shown, series, strict=True))])
     return target

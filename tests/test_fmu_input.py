@@ -22,7 +22,6 @@ import numpy as np
 import pytest
 
 from cosim.cli import main
-from cosim.errors import ConfigurationError
 from cosim.export import read_trace
 from cosim.fmu import Fmu
 from cosim.fmubuild import ensure_fmu
