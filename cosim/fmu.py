@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import difflib
+import functools
 import re
 import shutil
 import tempfile
@@ -58,8 +59,16 @@ def read_description(path: str | Path, *, cosimulation: bool = True, validate: b
     """
     path = Path(path)
     _check_is_fmu(path)
+    stat = path.stat()
+    return _read_description(str(path.resolve()), stat.st_mtime_ns, stat.st_size, cosimulation, validate)
+
+
+@functools.lru_cache(maxsize=32)
+def _read_description(path_text: str, mtime_ns: int, size: int, cosimulation: bool, validate: bool) -> Any:
+    """:func:`read_description` of one version of a file (read once: the schema check costs ~10 ms)."""
+    path = Path(path_text)
     try:
-        model = read_model_description(str(path), validate=validate)
+        model = read_model_description(path_text, validate=validate)
     except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
         traceback.clear_frames(exc.__traceback__)  # fmpy's frames hold the FMU's file open: close it now
         problems = getattr(exc, "problems", None)
@@ -599,6 +608,25 @@ class Fmu:
 
         return fill
 
+    def block_sampler(self, names: Sequence[str], sinks: Sequence[Callable[[Any, Any], None]], *,
+                      rows: int = 1024) -> BlockSampler | None:
+        """A :class:`BlockSampler` of ``names``, or None if one of them is not a numeric or Boolean scalar.
+
+        ``sinks[i](t, values)`` receives the samples of variable ``i`` in blocks: numpy arrays of the
+        ticks (int64) and of the values (the variable's C type), at most ``rows`` at a time.
+        """
+        variables = [self.variable(name) for name in names]
+        if not variables or any(not v.kind.is_numeric or v.shape for v in variables) or len(sinks) != len(variables):
+            return None
+        groups: dict[str, list[int]] = {}
+        for i, var in enumerate(variables):
+            groups.setdefault(var.kind.function, []).append(i)
+        getters = {function: self._bare(f"fmi{self.fmi_version}Get{function}") for function in groups}
+        if any(get is None for get in getters.values()):
+            return None
+        return BlockSampler(self, [(getters[function], [variables[i] for i in indices],
+                                    [sinks[i] for i in indices]) for function, indices in groups.items()], rows=rows)
+
     def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
         """A function setting ``names`` (all Float64/Real scalar inputs) to its argument's values in one FMI call.
 
@@ -797,6 +825,65 @@ class Fmu:
 
 def _refuse(error: Exception, *args: Any) -> Any:
     raise error
+
+
+class BlockSampler:
+    """Samples of an FMU's numeric outputs taken into blocks, handed on a block at a time.
+
+    Made by :meth:`Fmu.block_sampler`. :meth:`take` reads every variable at tick ``t`` with one FMI
+    call per type, the getter writing straight into the next row of a numpy block (no Python value
+    is made per variable); :meth:`flush` hands each variable's samples so far to its sink. The
+    master flushes before anything else can look at the trace, so a block is never seen half full.
+    """
+
+    def __init__(self, fmu: Fmu, groups: list[tuple[Any, list[Variable], list[Callable[[Any, Any], None]]]], *,
+                 rows: int) -> None:
+        import numpy as np
+
+        self.fmu = fmu
+        self.rows = rows
+        self.count = 0
+        self.times = np.zeros(rows, dtype=np.int64)
+        component = ctypes.c_void_p(fmu._fmu.component)
+        #: per row, the calls that read into it: (getter, its arguments with that row's address)
+        self._rows: list[list[tuple[Any, tuple[Any, ...]]]] = [[] for _ in range(rows)]
+        self._blocks: list[tuple[Any, list[Callable[[Any, Any], None]]]] = []
+        for get, variables, sinks in groups:
+            n = len(variables)
+            block = np.zeros((rows, n), dtype=np.dtype(variables[0].kind.ctype))
+            size = ctypes.c_size_t(n)
+            vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
+            tail: tuple[Any, ...] = () if fmu.fmi_version == 2 else (size,)
+            for i, calls in enumerate(self._rows):
+                calls.append((get, (component, vrs, size, ctypes.c_void_p(block[i].ctypes.data), *tail)))
+            self._blocks.append((block, sinks))
+        self._names = ", ".join(v.name for _, variables, _ in groups for v in variables)
+
+    def take(self, t: int) -> None:
+        """Read every variable now, as the sample at tick ``t``."""
+        fmu = self.fmu
+        if fmu._fmu is None:
+            raise FmuError(f"{fmu._where} is closed (its simulation has ended)")
+        i = self.count
+        for get, args in self._rows[i]:
+            status = get(*args)
+            if status > 1:
+                raise FmuError(f"{fmu._where} at t={fmu.t} ticks: reading {self._names} failed with status "
+                               f"{_STATUS.get(status, status)}", fmu.log)
+        self.times[i] = t
+        self.count = i + 1
+        if self.count == self.rows:
+            self.flush()
+
+    def flush(self) -> None:
+        """Hand the samples taken so far to the sinks (in time order), and start a new block."""
+        n, self.count = self.count, 0
+        if not n:
+            return
+        times = self.times[:n].copy()
+        for block, sinks in self._blocks:
+            for j, sink in enumerate(sinks):
+                sink(times, block[:n, j].copy())
 
 
 def _put(values: list[Any], i: int, t: int, value: Any) -> None:

@@ -22,7 +22,7 @@ from typing import Any
 from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmuvars import Variable, trace_names
 
-__all__ = ["plant_name", "run_fmu", "trace_names", "write_outputs_csv"]
+__all__ = ["outputs_rows", "plant_name", "run_fmu", "trace_names"]
 
 def plant_name(path: Path) -> str:
     """A device name for the trace from the FMU file's name (``TypesTest.fmu`` -> ``typestest``)."""
@@ -90,12 +90,13 @@ def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: s
     device = plant_name(path)
     names = trace_names(outputs, device, order=[sv.name for sv in model.modelVariables])
     notes = _validation_note(path, findings)
+    rows: list[list[str]] = []
     result = _run(path, device=device, values=values, sets=sets or {}, variables=variables, names=names,
                   t_start=t_start, end=end, period=period, table=table, validate=validate, notes=notes, out=out,
-                  formats=formats, progress=progress)
-    if out is not None:
-        whole = {name for name, var in variables.items() if not var.kind.is_float}
-        write_outputs_csv(Path(out), names, timebase=timebase, integers=whole)
+                  formats=formats, progress=progress, rows=rows)
+    if out is not None and rows and result.out is not None:
+        with (Path(result.out) / "outputs.csv").open("w", newline="", encoding="utf-8") as handle:
+            csv.writer(handle).writerows(rows)
     return result
 
 
@@ -164,7 +165,7 @@ def _validation_note(path: Path, findings: list[str]) -> list[str]:
 def _run(path: Path, *, device: str, values: dict[str, Any], sets: Mapping[str, str],
          variables: Mapping[str, Variable], names: dict[str, str], t_start: int, end: int, period: int,
          table: Any, validate: bool, notes: list[str], out: str | Path | None, formats: tuple[str, ...],
-         progress: bool) -> Any:
+         progress: bool, rows: list[list[str]]) -> Any:
     from cosim.fmu import Fmu
     from cosim.master import Plant
     from cosim.runner import run_scenario
@@ -187,11 +188,16 @@ def _run(path: Path, *, device: str, values: dict[str, Any], sets: Mapping[str, 
             drive_from_table(plant, table)
         sample = plant.record(names, period=period, at_events=False)  # the grid alone, as simulate_fmu
         try:
-            run.run_until(run.until)
-        except PlantTerminated:
-            sample()  # the instant the FMU stopped at, as fmpy's simulate_fmu records it
-            raise
-        sample()  # the end instant too (or, if the FMU stops on the way there, its last values where it stopped)
+            try:
+                run.run_until(run.until)
+            except PlantTerminated:
+                sample()  # the instant the FMU stopped at, as fmpy's simulate_fmu records it
+                raise
+            sample()  # the end instant too (or, if the FMU stops on the way there, its values where it stopped)
+        finally:
+            if out is not None:
+                rows.extend(outputs_rows(sim.trace, names, integers={n for n, v in variables.items()
+                                                                     if not v.kind.is_float}))
 
     params = tuple(Param(name, value if isinstance(value, bool | int | float | str) else text, variables[name].unit)
                    for (name, value), text in zip(values.items(), sets.values(), strict=True))
@@ -200,33 +206,21 @@ def _run(path: Path, *, device: str, values: dict[str, Any], sets: Mapping[str, 
     return run_scenario(scenario_file, until=end, out=out, formats=formats, progress=progress)
 
 
-def write_outputs_csv(out: Path, names: Mapping[str, str], *, timebase: Any,
-                      integers: Collection[str] = ()) -> Path | None:
-    """``outputs.csv``: time [s] and every recorded output on the grid, headed by the FMU's own names.
-
-    Read back from the run's trace files; reals as Python writes them (``repr``, exact), the
-    ``integers`` (integer, Boolean and enumeration outputs) as whole numbers. None if the run
-    wrote no trace (it failed before recording).
-    """
-    from cosim.export import read_trace
-
-    try:
-        trace = read_trace(out)
-    except (OSError, ConfigurationError, ValueError):
-        return None
+def outputs_rows(trace: Any, names: Mapping[str, str], *, integers: Collection[str] = ()) -> list[list[str]]:
+    """The rows of ``outputs.csv``: a header (``time`` and the FMU's own names), then time [s] and every
+    recorded output at each grid point; reals as Python writes them (``repr``: exact), the ``integers``
+    (integer, Boolean and enumeration outputs) as whole numbers. Empty if the outputs were not sampled
+    on one grid."""
     columns = [(variable, name) for variable, name in names.items() if name in trace.info]
     if not columns:
-        return None
+        return []
     series = [trace.edges(name) for _, name in columns]
-    times = series[0][0]
-    if any(t.tolist() != times.tolist() for t, _ in series):
-        return None  # not one grid (samples at events too): the trace files hold everything
-    shown = [(lambda x: str(int(x))) if variable in integers else (lambda x: repr(float(x))) for variable, _ in columns]
-    target = out / "outputs.csv"
-    with target.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(["time", *(variable for variable, _ in columns)])
-        for row, t in enumerate(times.tolist()):
-            writer.writerow([repr(timebase.seconds(t)),
-                             *(show(values[row]) for show, (_, values) in zip(shown, series, strict=True))])
-    return target
+    times = series[0][0].tolist()
+    if any(t.tolist() != times for t, _ in series):
+        return []
+    seconds = trace.timebase.seconds
+    rows = [["time", *(variable for variable, _ in columns)]]
+    shown = [[str(int(x)) for x in values.tolist()] if variable in integers else [repr(x) for x in values.tolist()]
+             for (variable, _), (_, values) in zip(columns, series, strict=True)]
+    rows += [[repr(seconds(t)), *(column[i] for column in shown)] for i, t in enumerate(times)]
+    return rows

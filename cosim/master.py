@@ -159,6 +159,11 @@ class Plant:
         self.steps += 1
         for hook in self._after_step:
             hook(reached)
+        if reached < t:
+            self._resume(t, reached)
+
+    def _resume(self, t: int, reached: int) -> None:
+        """The rest of a step to ``t`` that returned early at ``reached`` (an event of the plant's own)."""
         while reached < t:  # early return at an event: sample there, go on (watched plants never lag now)
             for take in self._samplers:
                 take(reached)
@@ -298,6 +303,7 @@ class Plant:
         mapping = dict(variables) if isinstance(variables, Mapping) else trace_names(
             list(variables), self.name, order=list(self.fmu.variables))
         sinks: list[Callable[[int, Any], None]] = []
+        blocks: list[Callable[[Any, Any], None]] = []  # trace.extend of each signal: for samples taken in blocks
         for variable, trace_name in mapping.items():
             var = self.fmu.variable(variable)
             if not var.kind.is_numeric:
@@ -309,20 +315,35 @@ class Plant:
                 self.sim.trace.declare(name, "real", unit=unit, description=f"{self.name} {variable}")
             recorders = [self.sim.trace.recorder(name) for name in elements]
             sinks.append(partial(_record_elements, recorders) if var.shape else recorders[0])
+            blocks.append(partial(self.sim.trace.extend, elements[0]))
         t0 = self.sim.now if start is None else start
 
         self.sim.timebase.check_ticks(t0, name="start", minimum=self.sim.now)
         fill = self.fmu.sampler(list(mapping), sinks)  # numbers and bools go to the trace as they come
+        # in a row of samples without other events between them: read into blocks, handed to the trace
+        # when the row ends (before anything else can look at the trace)
+        block = self.fmu.block_sampler(list(mapping), blocks)
         sim, env, fmu = self.sim, self.sim.env, self.fmu
-        due_by, count_step, advance_to = sim.due_by, env.count_step, self._advance_to
+        peek, count_step, advance_to, step = env.peek, env.count_step, self._advance_to, self._step
 
         last = [-1]  # the tick of the latest sample
 
         def take(t: int) -> None:
             if last[0] == t:
                 return  # sampled at this tick already (an input change or an event asked first)
+            if block is not None and block.count:
+                block.flush()
             fill(t)
             last[0] = t
+
+        def take_in_row(t: int) -> None:
+            if last[0] == t:
+                return
+            block.take(t)  # type: ignore[union-attr]
+            last[0] = t
+
+        in_row = take_in_row if block is not None else take
+        flush = block.flush if block is not None else (lambda: None)
 
         def sample_now() -> None:
             try:
@@ -346,17 +367,26 @@ class Plant:
                     if fmu.t != t:
                         self.advance()
                     while True:
-                        take(t)
+                        in_row(t)
                         k += 1
                         t = t0 + k * period
-                        if env.look_aheads or self._watched or due_by(t):
+                        if env.look_aheads or self._watched or peek() <= t:  # sim.due_by(t)
                             break
                         count_step(t)  # progress on long sampled runs, which run here without events
-                        advance_to(t)
+                        if self._before_step or self._after_step:
+                            advance_to(t)
+                        else:  # _advance_to without hooks, inline
+                            reached = step(t)
+                            self.steps += 1
+                            if reached < t:
+                                self._resume(t, reached)
                 except PlantTerminated as ended:
+                    flush()
                     if ended.t == t:
                         take(t)
                     raise
+                finally:
+                    flush()
 
         self.sim.process(sample())  # type: ignore[arg-type]
         if at_events:
