@@ -167,23 +167,36 @@ def _args_export_fmu(parser: argparse.ArgumentParser) -> None:
                         help="FMI version (default 3: early return and event mode at event-bearing outputs)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="set a machine-file key first (as for `cosim run`)")
+    parser.add_argument("--linked", action="store_true",
+                        help="do not carry cosim and its packages: the FMU uses this environment (its site folders "
+                             "are recorded) and runs only where it exists; small and quick to write")
 
 
 def cmd_export_fmu(args: argparse.Namespace) -> int:
     from cosim.fmu_export.package import export_fmu, libpython
+    from cosim.fmubuild import platform_folder
 
     out = args.out or Path(f"{args.machine.stem}.fmu")
     _check_output_file(out, "-o")
-    exported = export_fmu(args.machine, out, fmi_version=args.fmi, overrides=_parse_sets(args.overrides))
+    exported = export_fmu(args.machine, out, fmi_version=args.fmi, overrides=_parse_sets(args.overrides),
+                          portable=not args.linked)
+    size_mb = exported.path.stat().st_size / 1e6
     print(f"wrote {exported.path}: FMI {args.fmi}.0 co-simulation, step {exported.step_s:g} s, "
-          f"stop {exported.stop_s:g} s")
+          f"stop {exported.stop_s:g} s, {size_mb:.1f} MB")
     for kind, ports in (("output", exported.outputs), ("input", exported.inputs)):
         for port in ports:
             event = " (event)" if port.event else ""
             print(f"  {kind:<6}  {port.name:<32} {port.fmi_type:<7} {port.source}{event}")
-    runtime = libpython() or "none: the FMU runs only inside a Python importer (fmpy)"
-    print(f"it runs cosim in Python {sys.version_info.major}.{sys.version_info.minor} (libpython: {runtime}) "
-          f"with this environment ({sys.prefix}); see docs/export.md")
+    version = f"{sys.version_info.major}.{sys.version_info.minor}"
+    if exported.wheels:
+        print(f"it carries cosim and {len(exported.wheels) - 1} packages ({', '.join(exported.wheels)}), installed "
+              f"on first use into a per-user cache: it runs on any {platform_folder(args.fmi)} computer with CPython "
+              f"{version} (a C importer needs its shared libpython; this one's: {libpython() or 'none'}); see "
+              "docs/export.md")
+    else:
+        runtime = libpython() or "none: the FMU runs only inside a Python importer (fmpy)"
+        print(f"it runs cosim in Python {version} (libpython: {runtime}) with this environment ({sys.prefix}): "
+              "only where it exists (--linked); see docs/export.md")
     return EXIT_PASS
 
 
@@ -453,9 +466,11 @@ COMMANDS: tuple[Command, ...] = (
             arguments=_args_export_fmu,
             description="Write MACHINE.toml as a co-simulation FMU whose outputs and inputs are those its [export] "
                         "table names (controller signals, step counts, plant variables; switches and digital "
-                        "inputs). The FMU runs the machine in cosim's integer time through the Python runtime it "
-                        "records; event-bearing outputs (gate edges, direction, limit stops) come with FMI 3.0 "
-                        "early return and event mode. See docs/export.md.",
+                        "inputs). The FMU runs the machine in cosim's integer time in Python: it carries cosim and "
+                        "the packages the machine imports as wheels, installed on first use into a per-user cache, "
+                        "so it runs on any computer of this platform with a CPython of this minor version (--linked: "
+                        "it uses this environment instead). Event-bearing outputs (gate edges, direction, limit "
+                        "stops) come with FMI 3.0 early return and event mode. See docs/export.md.",
             epilog="example: cosim export-fmu examples/trio_tn20_81/tn20_81.toml -o tn20_81.fmu"),
     Command("list", cmd_list, "list the bundled scenarios and example machines with their descriptions"),
     Command("params", cmd_params, "show a scenario's parameters (name, default, unit, range, help)",
