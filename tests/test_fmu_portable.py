@@ -209,3 +209,15 @@ def test_a_missing_python_is_said_exactly_in_the_fmu_log(away: dict[str, object]
     assert "(recorded at export: not on this computer)" in output
     assert f"libpython{version}.so.1.0 (not on the library search path)" in output
     assert f"set COSIM_FMU_LIBPYTHON to its libpython{version}.so.1.0" in output
+
+
+def test_the_stage_sample_in_the_docs_is_what_the_script_prints() -> None:
+    """docs/export.md shows docs/samples/stage_in_fmpy.txt, made by the command below: it must be what the
+    script prints now (``python examples/trio_tn20_81_fmu/stage_in_fmpy.py > docs/samples/stage_in_fmpy.txt``)."""
+    script = ROOT / "examples" / "trio_tn20_81_fmu" / "stage_in_fmpy.py"
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    shown = (ROOT / "docs" / "samples" / "stage_in_fmpy.txt").read_text()
+    assert done.stdout == shown
+    assert shown.splitlines()[0].startswith("t = 470.125100 ms  gate on ")  # the tick of cosim run's first edge
+    assert '--8<-- "docs/samples/stage_in_fmpy.txt"' in (ROOT / "docs" / "export.md").read_text()
