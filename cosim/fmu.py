@@ -702,6 +702,43 @@ class Fmu:
 
         return write
 
+    def array_reader(self, name: str, out: Any) -> Callable[[], None]:
+        """A function reading the array variable ``name`` into ``out`` in one FMI call (prepared once).
+
+        ``out`` is a C-contiguous numpy array of the variable's C type (float64 for Float64, int32
+        for Int32...) with as many elements as the variable; FMI 3.0 only. A status above Warning
+        raises :class:`FmuError`.
+        """
+        import numpy as np
+
+        var = self.variable(name)
+        if not var.shape or self.fmi_version != 3 or not var.kind.is_numeric:
+            raise ConfigurationError(f"{self.instance_name}: array_reader() takes a numeric array of an FMI 3.0 FMU; "
+                                     f"got {var.name} ({var.type}{var.dimensions}, FMI {self.fmi_version}.0)")
+        if not (isinstance(out, np.ndarray) and out.dtype == np.dtype(var.kind.ctype) and out.flags.c_contiguous
+                and out.size == var.size):
+            raise ConfigurationError(f"{self.instance_name}: array_reader({name!r}) needs a C-contiguous numpy array "
+                                     f"of {var.size} {np.dtype(var.kind.ctype)} elements")
+        get = self._bare(f"fmi3Get{var.kind.function}")
+        if get is None:
+            def read_slowly() -> None:
+                out[...] = np.asarray(var.get()).reshape(out.shape)
+
+            return read_slowly
+        size = ctypes.c_size_t(var.size)
+        args = (ctypes.c_void_p(self._fmu.component), (ctypes.c_uint32 * 1)(var.vr), ctypes.c_size_t(1),
+                ctypes.c_void_p(out.ctypes.data), size)
+
+        def read() -> None:
+            if self._fmu is None:
+                raise FmuError(f"{self._where} is closed (its simulation has ended)")
+            status = get(*args)
+            if status > 1:
+                raise FmuError(f"{self._where} at t={self.t} ticks: reading {name} failed with status "
+                               f"{_STATUS.get(status, status)}", self.log)
+
+        return read
+
     def advance_to(self, t: int) -> int:
         """Advance the FMU to tick ``t``; returns the tick it reached.
 

@@ -44,6 +44,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from cosim import sampleschedule
 from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmu import Fmu, Value
 from cosim.fmuvars import trace_names
@@ -304,8 +305,10 @@ class Plant:
             list(variables), self.name, order=list(self.fmu.variables))
         sinks: list[Callable[[int, Any], None]] = []
         blocks: list[Callable[[Any, Any], None]] = []  # trace.extend of each signal: for samples taken in blocks
+        arrays = False
         for variable, trace_name in mapping.items():
             var = self.fmu.variable(variable)
+            arrays = arrays or bool(var.shape)
             if not var.kind.is_numeric:
                 raise ConfigurationError(f"{self.name}.{variable} is a {var.type} variable: the trace records "
                                          "numbers and Booleans only (read it with read())")
@@ -352,6 +355,12 @@ class Plant:
                 take(fmu.t)  # the FMU asked to end the simulation on the way: its values at that instant
                 raise
             take(fmu.t if fmu.terminated is not None else sim.now)  # a terminated plant: its last instant
+
+        if not arrays and sampleschedule.capacity(self, list(mapping)):  # samples inside the plant's own steps
+            sampleschedule.ScheduledSamples(self, list(mapping), blocks, take, t0=t0, period=period)
+            if at_events:
+                self._samplers.append(take)
+            return sample_now
 
         def sample() -> object:
             # The hot loop of sampled runs. While nothing else is due before the next sample (no
