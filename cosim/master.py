@@ -21,7 +21,14 @@ instant an input changes through :meth:`Plant.drive` or :meth:`Plant.set` (a gat
 command), once per instant after everything else there, and at the plant's events (an early
 return, a watched output changing). Inputs set on a coupling's hot path (:meth:`Plant.setter`,
 :meth:`Plant.ahead_writer`: a stepper's rate or its per-slot pulse segments) add no samples. These
-samples cost no FMU step: the plant is at that instant already.
+samples cost no FMU step: the plant is at that instant already. A grid sample costs one, unless the
+plant takes samples inside its own steps (:mod:`cosim.sampleschedule`: the Laser does for power and
+energy): then the samples ride inside the steps the plant makes anyway, bit-identical.
+
+The calls are prepared once: a step is one ctypes call with arguments made at load
+(:meth:`cosim.fmu.Fmu.stepper`), a sample one getter call per FMI type; samples taken in a row,
+with nothing else due between them, are read into numpy blocks and handed to the trace when the
+row ends (:class:`cosim.fmu.BlockSampler`).
 
 Every FMI variable type can be read and set (:mod:`cosim.fmuvars`: arrays as numpy arrays);
 numeric and Boolean outputs can be recorded (an array as one trace signal per element,
