@@ -155,6 +155,8 @@ class ScheduledSamples:
             k = self.next_k + self.n - 1 if self.next_k else 0
             t = self.instant(k)
             yield At(env, t, Priority.SAMPLE)
+            for _ in range(self.n if k else 1):  # progress counts samples (a long sampled run shows it moving)
+                env.count_step(t)
             if self.next_k > k:
                 continue  # taken meanwhile
             if self.plant.fmu.terminated is None:
