@@ -1,9 +1,26 @@
-"""Per-communication-step cost of cosim's master against fmpy's own ``simulate_fmu``.
+"""Per-communication-step cost of cosim's master against fmpy's ``simulate_fmu``, and run-fmu's start-up.
 
-Both drive the same Laser FMU on the same fixed grid (the scenario asks for sampling every
-``STEP_NS``) and record the same outputs; the figure is the ratio of time per step, in process
-CPU time (and wall time beside it), measured in one process, one after the other, ``--repeat``
-times (min / median / max). Run::
+Issue 32 names three FMUs of the Modelica Reference-FMUs, VanDerPol, BouncingBall and Dahlquist;
+their binaries are on GitHub, which this project cannot reach, so ``bench/fmus/`` holds our own
+models of the same equations, start values, default experiments and internal solver steps (built
+here into ``models/bench/``). Issue 29 names the bundled Servo FMU on the PMAC's 442 us servo
+grid (u_cmd = 2 V: the motor turns and the encoder counts, as in a PMAC run).
+
+Both importers run the same FMU on the same fixed output grid and record the same outputs (all
+of them, as ``cosim run-fmu`` does): fmpy's ``simulate_fmu(output_interval=...)``, and cosim's
+master as ``run-fmu`` drives it (``Plant.record(at_events=False)``: the grid alone). The figure is
+process CPU time per step, start-up cancelled: (cost of N steps - cost of N/10 steps) / (0.9 N).
+Each is measured ``--repeat`` times (min / median / max), alternating the two importers; the
+ratio is taken run by run. Beside them, the C alone: the same doSteps and one getter call per type
+through ctypes with arguments made once, nothing recorded (no Python importer can go below it);
+"above it" compares what each importer adds to that C (cosim's master against fmpy's loop).
+The values of both are compared (the same FMU must give the same outputs; BouncingBall would
+differ near a bounce, which cosim locates with early return and fmpy at the next grid point).
+
+Start-up: ``cosim run-fmu`` on Dahlquist for its default experiment (101 steps) in a fresh
+interpreter, CPU time of the child process (target < 0.4 s).
+
+Run::
 
     .venv/bin/python bench/bench_master.py [--steps N] [--fmi 2|3] [--repeat 3]
 """
@@ -11,57 +28,195 @@ times (min / median / max). Run::
 from __future__ import annotations
 
 import argparse
+import ctypes
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
-from clock import Lap, machine_load, measure, spread
+import numpy as np
+from clock import machine_load, measure, spread
 from fmpy import simulate_fmu
 
-from cosim.fmubuild import ensure_fmu
+from cosim.fmu import Fmu
+from cosim.fmubuild import CHECKOUT, MODELS_DIR, SOURCE_DIR, ensure_fmu
 from cosim.kernel import Simulation
 from cosim.master import Plant
 
-STEP_NS = 10_000  # 10 us communication step
-INPUTS = {"enable": True, "gate": True, "pwm_period": 1000, "pwm_on": 400}
-OUTPUTS = ["power", "energy"]
+BENCH_MODELS = Path(__file__).resolve().parent / "fmus"
 
 
-def run_fmpy(path: str, steps: int) -> Lap:
+@dataclass(frozen=True)
+class Case:
+    """One FMU on one grid: what both importers run."""
+
+    name: str
+    step_ns: int
+    outputs: tuple[str, ...]
+    start_values: dict[str, float]
+    target: float  # the ratio cosim/fmpy to reach
+
+
+CASES = (
+    Case("VanDerPol", 10_000_000, ("x0", "x1"), {}, 1.0),
+    Case("BouncingBall", 10_000_000, ("h", "v"), {}, 1.0),
+    Case("Dahlquist", 100_000_000, ("x",), {}, 1.0),
+    Case("Servo", 442_000, ("angle", "speed", "current", "motor_voltage", "torque", "stuck", "encoder_count",
+                            "edge_count", "edge_direction", "t_last_edge", "t_prev_edge"), {"u_cmd": 2.0}, 0.5),
+)
+
+
+def bench_fmus(fmi_version: int) -> dict[str, Path]:
+    """Build the bench models (bench/fmus) into models/bench, in a child process (the build reads its folders
+    from the environment); the Servo is the bundled one."""
+    target = (CHECKOUT / "models" / "bench") if CHECKOUT is not None else MODELS_DIR / "bench"
+    with tempfile.TemporaryDirectory(prefix="cosim-bench-src-") as tmp:
+        sources = Path(tmp)
+        (sources / "common").symlink_to(SOURCE_DIR / "common")
+        for model in ("VanDerPol", "BouncingBall", "Dahlquist"):
+            (sources / model).symlink_to(BENCH_MODELS / model)
+        env = dict(os.environ, COSIM_FMU_SRC=str(sources), COSIM_MODELS=str(target))
+        subprocess.run([sys.executable, "-m", "cosim.fmubuild", "--quiet"], env=env, check=True)
+    paths = {model: target / f"fmi{fmi_version}" / f"{model}.fmu" for model in ("VanDerPol", "BouncingBall",
+                                                                                  "Dahlquist")}
+    paths["Servo"] = ensure_fmu("Servo", fmi_version)
+    return paths
+
+
+def run_fmpy(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
     with measure() as lap:
-        simulate_fmu(path, start_time=0.0, stop_time=steps * STEP_NS * 1e-9, output_interval=STEP_NS * 1e-9,
-                     start_values=INPUTS, output=OUTPUTS, fmi_type="CoSimulation")
-    return lap
+        result = simulate_fmu(str(path), start_time=0.0, stop_time=steps * case.step_ns * 1e-9,
+                              output_interval=case.step_ns * 1e-9, start_values=case.start_values,
+                              output=list(case.outputs), fmi_type="CoSimulation")
+    return lap.cpu_s, {name: result[name].astype(float) for name in case.outputs}
 
 
-def run_cosim(path: str, steps: int) -> Lap:
+def run_cosim(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
     with measure() as lap, Simulation() as sim:
-        laser = Plant.load(sim, path, name="laser")
-        laser.set(INPUTS)
-        laser.record(OUTPUTS, period=STEP_NS)
-        sim.run(until=steps * STEP_NS + 1)
-    return lap
+        plant = Plant(sim, Fmu(path, timebase=sim.timebase, instance_name="m", parameters=case.start_values),
+                      name="m")
+        sample = plant.record(list(case.outputs), period=case.step_ns, at_events=False)  # as run-fmu does
+        sim.run(until=steps * case.step_ns)
+        sample()
+        values = {name: sim.trace.edges(f"m.{name}")[1] for name in case.outputs}
+    return lap.cpu_s, values
+
+
+def run_floor(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
+    """The C the importers call, and nothing else: each step one doStep and one getter call per type, made
+    with ctypes arguments prepared once (no recording, no checks): what no Python importer can go below."""
+    fmu = Fmu(path, parameters=case.start_values)
+    try:
+        function = f"fmi{fmu.fmi_version}DoStep"
+        do_step = fmu._bare(function)
+        component = ctypes.c_void_p(fmu._fmu.component)
+        t_arg, h_arg = ctypes.c_double(), ctypes.c_double(case.step_ns * 1e-9)
+        flags = [ctypes.c_bool() for _ in range(3)]
+        last = ctypes.c_double()
+        args = ((component, t_arg, h_arg, ctypes.c_int(1)) if fmu.fmi_version == 2 else
+                (component, t_arg, h_arg, ctypes.c_bool(True), *map(ctypes.byref, flags), ctypes.byref(last)))
+        groups: dict[str, list[Any]] = {}
+        for name in case.outputs:
+            var = fmu.variable(name)
+            groups.setdefault(var.kind.function, []).append(var)
+        calls = []
+        for kind, variables in groups.items():
+            n = len(variables)
+            size = ctypes.c_size_t(n)
+            buffer = (variables[0].kind.ctype * n)()
+            tail = () if fmu.fmi_version == 2 else (size,)
+            calls.append((fmu._bare(f"fmi{fmu.fmi_version}Get{kind}"),
+                          (component, (ctypes.c_uint32 * n)(*[v.vr for v in variables]), size, buffer, *tail)))
+        with measure() as lap:
+            for k in range(steps):
+                t_arg.value = k * case.step_ns / 1e9
+                do_step(*args)
+                for get, get_args in calls:
+                    get(*get_args)
+    finally:
+        fmu.close()
+    return lap.cpu_s, {}
+
+
+def per_step(run: object, path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
+    """CPU seconds per step, start-up cancelled (N steps minus N/10 steps), and the long run's values."""
+    long_s, values = run(path, case, steps)  # type: ignore[operator]
+    short_s, _ = run(path, case, steps // 10)  # type: ignore[operator]
+    return (long_s - short_s) / (steps - steps // 10), values
+
+
+def startup(path: Path, repeat: int) -> list[float]:
+    """CPU seconds of ``cosim run-fmu`` in a fresh interpreter (the child's user + system time)."""
+    laps = []
+    with tempfile.TemporaryDirectory(prefix="cosim-bench-") as tmp:
+        for _ in range(repeat):
+            with measure(children=True) as lap:
+                subprocess.run([sys.executable, "-m", "cosim", "run-fmu", str(path), "--out", str(Path(tmp) / "out")],
+                               check=True, stdout=subprocess.DEVNULL)
+            laps.append(lap.cpu_s)
+    return laps
+
+
+def laser_samples(repeat: int) -> None:
+    """The engraver's case: the Laser recorded every 100 us for 4 s with nothing else stepping it; the samples
+    taken inside its steps (its sample_schedule) against a doStep per sample."""
+    from cosim import sampleschedule
+
+    inside = sampleschedule.capacity
+    for name, capacity in (("a doStep per sample", lambda *args: 0), ("inside its steps", inside)):
+        sampleschedule.capacity = capacity  # type: ignore[assignment]
+        laps, steps = [], 0
+        for _ in range(repeat):
+            with Simulation() as sim:
+                laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "gate": True,
+                                                                            "pwm_period": 1000, "pwm_on": 400})
+                with measure() as lap:
+                    laser.record(["power", "energy"], period=100_000)
+                    sim.run(until=4_000_000_000)
+                laps.append(lap.cpu_s * 1e3)
+                steps = laser.steps
+        print(f"  Laser every 0.1 ms for 4 s (40,000 samples), {name:<20}: {steps:6d} doSteps, CPU "
+              f"{spread(laps, '{:.1f}')} ms")
+    sampleschedule.capacity = inside  # type: ignore[assignment]
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=50_000)
+    parser.add_argument("--steps", type=int, default=20_000, help="communication steps of the long run")
     parser.add_argument("--fmi", type=int, choices=(2, 3), default=3)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3: min/median/max)")
     args = parser.parse_args()
-    path = str(ensure_fmu("Laser", args.fmi))
+    paths = bench_fmus(args.fmi)
     print(f"machine: {machine_load()}")
-    run_fmpy(path, 1000)  # warm up (loading, caches)
-    run_cosim(path, 1000)
-    fmpy_laps, cosim_laps = [], []
-    for _ in range(args.repeat):
-        fmpy_laps.append(run_fmpy(path, args.steps))
-        cosim_laps.append(run_cosim(path, args.steps))
-    per_step = 1e6 / args.steps
-    print(f"Laser FMI {args.fmi}.0, {args.steps} steps of {STEP_NS} ns, outputs {OUTPUTS}; {args.repeat} runs: "
-          "min / median / max [us/step]")
-    for name, laps in (("fmpy simulate_fmu", fmpy_laps), ("cosim master", cosim_laps)):
-        print(f"  {name:18s}: cpu {spread([lap.cpu_s * per_step for lap in laps], '{:.2f}')}   "
-              f"wall {spread([lap.wall_s * per_step for lap in laps], '{:.2f}')}")
-    ratio = [c.cpu_s / f.cpu_s for c, f in zip(cosim_laps, fmpy_laps, strict=True)]
-    print(f"  ratio cosim/fmpy (cpu, run by run): {spread(ratio)}  (target <= 1.0)")
+    print(f"FMI {args.fmi}.0, {args.steps} steps minus {args.steps // 10}, {args.repeat} runs each; CPU us per step "
+          "(min / median / max), with recording")
+    for case in CASES:
+        path = paths[case.name]
+        run_fmpy(path, case, 200)  # warm up (loading, caches)
+        run_cosim(path, case, 200)
+        fmpy_us, cosim_us, floor_us, ratios, above = [], [], [], [], []
+        for _ in range(args.repeat):
+            c_floor, _ = per_step(run_floor, path, case, args.steps)
+            f, fmpy_values = per_step(run_fmpy, path, case, args.steps)
+            c, cosim_values = per_step(run_cosim, path, case, args.steps)
+            floor_us.append(c_floor * 1e6)
+            fmpy_us.append(f * 1e6)
+            cosim_us.append(c * 1e6)
+            ratios.append(c / f)
+            above.append((c - c_floor) / (f - c_floor))
+        worst = max(float(np.max(np.abs(fmpy_values[n] - cosim_values[n]))) for n in case.outputs)
+        ok = "ok" if max(ratios) <= case.target else "NOT MET"
+        print(f"  {case.name:<12} every {case.step_ns / 1e6:g} ms: fmpy {spread(fmpy_us, '{:.2f}')}  cosim "
+              f"{spread(cosim_us, '{:.2f}')}  ratio {spread(ratios, '{:.2f}')} (target <= {case.target}: {ok})")
+        print(f"  {'':<12} the C alone (doStep + getters) {spread(floor_us, '{:.2f}')}; above it, cosim/fmpy "
+              f"{spread(above, '{:.2f}')}; largest difference of the values {worst:.3g}")
+    laser_samples(args.repeat)
+    laps = startup(paths["Dahlquist"], args.repeat)
+    print(f"  run-fmu start-up (Dahlquist, 101 steps, fresh interpreter): CPU {spread(laps, '{:.3f}')} s "
+          f"(target < 0.4 s: {'ok' if max(laps) < 0.4 else 'NOT MET'})")
 
 
 if __name__ == "__main__":

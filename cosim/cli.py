@@ -176,23 +176,49 @@ def _args_export_fmu(parser: argparse.ArgumentParser) -> None:
                         help="FMI version (default 3: early return and event mode at event-bearing outputs)")
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                         help="set a machine-file key first (as for `cosim run`)")
+    parser.add_argument("--linked", action="store_true",
+                        help="do not carry cosim and its packages: the FMU uses this environment (its site folders "
+                             "are recorded) and runs only where it exists; small and quick to write")
 
 
 def cmd_export_fmu(args: argparse.Namespace) -> int:
     from cosim.fmu_export.package import export_fmu, libpython
+    from cosim.fmubuild import platform_folder
 
     out = args.out or Path(f"{args.machine.stem}.fmu")
-    exported = export_fmu(args.machine, out, fmi_version=args.fmi, overrides=_parse_sets(args.overrides))
+    _check_output_file(out, "-o")
+    exported = export_fmu(args.machine, out, fmi_version=args.fmi, overrides=_parse_sets(args.overrides),
+                          portable=not args.linked)
+    size_mb = exported.path.stat().st_size / 1e6
     print(f"wrote {exported.path}: FMI {args.fmi}.0 co-simulation, step {exported.step_s:g} s, "
-          f"stop {exported.stop_s:g} s")
+          f"stop {exported.stop_s:g} s, {size_mb:.1f} MB")
     for kind, ports in (("output", exported.outputs), ("input", exported.inputs)):
         for port in ports:
             event = " (event)" if port.event else ""
             print(f"  {kind:<6}  {port.name:<32} {port.fmi_type:<7} {port.source}{event}")
-    runtime = libpython() or "none: the FMU runs only inside a Python importer (fmpy)"
-    print(f"it runs cosim in Python {sys.version_info.major}.{sys.version_info.minor} (libpython: {runtime}) "
-          f"with this environment ({sys.prefix}); see docs/export.md")
+    version = f"{sys.version_info.major}.{sys.version_info.minor}"
+    if exported.wheels:
+        print(f"it carries cosim and {len(exported.wheels) - 1} packages ({', '.join(exported.wheels)}), installed "
+              f"on first use into a per-user cache: it runs on any {platform_folder(args.fmi)} computer with CPython "
+              f"{version} (a C importer needs its shared libpython; this one's: {libpython() or 'none'}); see "
+              "docs/export.md")
+    else:
+        runtime = libpython() or "none: the FMU runs only inside a Python importer (fmpy)"
+        print(f"it runs cosim in Python {version} (libpython: {runtime}) with this environment ({sys.prefix}): "
+              "only where it exists (--linked); see docs/export.md")
     return EXIT_PASS
+
+
+def _check_output_file(path: Path, option: str) -> None:
+    """Refuse an output file that cannot be written, before any work: a folder in its way, a parent that is a file."""
+    if path.is_dir():
+        raise ConfigurationError(f"{option} {path}: is a folder; give the file to write (e.g. {path / 'machine.fmu'})")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise ConfigurationError(f"{option} {path}: {parent} is a file, not a folder: the FMU cannot be "
+                                         "written there")
+            break
 
 
 # -- list, params ---------------------------------------------------------------------------------
@@ -328,11 +354,20 @@ def _args_run_fmu(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--set", dest="overrides", action="append", default=[], metavar="NAME=VALUE",
                         help="start value of a parameter or input (repeatable; arrays: 1,2,3; enumerations: "
                              "the item name; binaries: hex)")
+    parser.add_argument("--input", type=Path, default=None, metavar="TABLE.csv",
+                        help="inputs over time: a CSV table, first column time [s], then one column per input "
+                             "named as the FMU names it; continuous real inputs are interpolated linearly, the "
+                             "others held from each row (as fmpy and fmusim do)")
+    parser.add_argument("--start", default=None,
+                        help="start time with unit, e.g. '1 s' (default: the FMU's default experiment, else 0)")
     parser.add_argument("--until", default=None,
-                        help="end time with unit, e.g. '2 s' (default: the FMU's default experiment, else 1 s)")
+                        help="end time with unit, e.g. '2 s' (default: the FMU's default experiment, else start + 1 s)")
     parser.add_argument("--step", default=None,
                         help="output grid with unit, e.g. '1 ms' (default: the default experiment's step size, "
                              "else 1/500 of the run)")
+    parser.add_argument("--no-validate", dest="validate", action="store_false",
+                        help="run an FMU whose model description fmpy's validator flags (a legacy FMU); the run's "
+                             "notes list what the validator found")
     _folder_completion(parser.add_argument("--out", type=Path, default=None,
                                            help="results folder (default results/<fmu name>)"))
     parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
@@ -340,13 +375,18 @@ def _args_run_fmu(parser: argparse.ArgumentParser) -> None:
 
 
 def cmd_run_fmu(args: argparse.Namespace) -> int:
-    from cosim.fmutools import plant_name, run_fmu
+    from cosim.fmurun import plant_name, run_fmu
 
     out = args.out or Path("results") / plant_name(args.fmu)
-    result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, out=out,
-                     formats=("vcd", args.format), progress=True)
+    result = run_fmu(args.fmu, sets=_parse_sets(args.overrides), until=args.until, step=args.step, start=args.start,
+                     input_table=args.input, validate=args.validate, out=out, formats=("vcd", args.format),
+                     progress=True)
+    for note in result.notes:
+        if note.startswith("WARNING"):
+            print(f"cosim run-fmu: {note}", file=sys.stderr)
     print(result.table())
-    print(_results_line(out) + "; the tables hold every numeric output on the grid")
+    print(_results_line(out) + "; the tables hold every numeric output on the grid (outputs.csv: with the FMU's "
+          "own names)")
     return _exit_status(result, allow_unchecked=True)  # an FMU run alone declares no checks: UNCHECKED, exit 0
 
 
@@ -468,9 +508,11 @@ COMMANDS: tuple[Command, ...] = (
             arguments=_args_export_fmu,
             description="Write MACHINE.toml as a co-simulation FMU whose outputs and inputs are those its [export] "
                         "table names (controller signals, step counts, plant variables; switches and digital "
-                        "inputs). The FMU runs the machine in cosim's integer time through the Python runtime it "
-                        "records; event-bearing outputs (gate edges, direction, limit stops) come with FMI 3.0 "
-                        "early return and event mode. See docs/export.md.",
+                        "inputs). The FMU runs the machine in cosim's integer time in Python: it carries cosim and "
+                        "the packages the machine imports as wheels, installed on first use into a per-user cache, "
+                        "so it runs on any computer of this platform with a CPython of this minor version (--linked: "
+                        "it uses this environment instead). Event-bearing outputs (gate edges, direction, limit "
+                        "stops) come with FMI 3.0 early return and event mode. See docs/export.md.",
             epilog="example: cosim export-fmu examples/trio_tn20_81/tn20_81.toml -o tn20_81.fmu"),
     Command("list", cmd_list, "list the bundled scenarios and example machines with their descriptions"),
     Command("params", cmd_params, "show a scenario's parameters or a machine file's keys (value, unit, allowed)",
@@ -492,13 +534,17 @@ COMMANDS: tuple[Command, ...] = (
                         "under the bundled FMUs' names or which ones to map with variables={role: name}."),
     Command("run-fmu", cmd_run_fmu, "simulate one FMU alone (like fmpy's simulate_fmu) into a result folder",
             arguments=_args_run_fmu,
-            description="Simulate one co-simulation FMU with the master, start values from --set, every "
-                        "numeric output recorded on a grid (0, step, 2 step, ... and the end), and write the "
-                        "usual result folder (result.json, trace.vcd, tables). An FMU that asks to end the "
-                        "simulation ends the run there (verdict TERMINATED, exit status 3). It declares no checks: "
-                        "its verdict is UNCHECKED, with exit status 0.",
-            epilog="example: cosim run-fmu models/fmi3/Stepper.fmu --set step_rate=2000 --until '50 ms' "
-                   "--step '1 ms'"),
+            description="Simulate one co-simulation FMU with the master: start values from --set, inputs over "
+                        "time from --input TABLE.csv, every numeric output recorded on a grid (start, start + "
+                        "step, ... and the end), and write the usual result folder (result.json, trace.vcd, "
+                        "tables) and outputs.csv (the grid with the FMU's own variable names). An FMU that asks "
+                        "to end the simulation ends the run there, with a last sample at that instant (verdict "
+                        "TERMINATED, exit status 3). It declares no checks: its verdict is UNCHECKED, with exit "
+                        "status 0. A file that is not an FMU, or an FMU fmpy's validator flags (without "
+                        "--no-validate), exits 2.",
+            epilog="examples: cosim run-fmu models/fmi3/Stepper.fmu --set step_rate=2000 --until '50 ms' "
+                   "--step '1 ms'; cosim run-fmu Feedthrough.fmu --input inputs.csv --step '10 ms'; cosim run-fmu "
+                   "legacy.fmu --no-validate"),
     Command("sweep", cmd_sweep, "run a scenario over a parameter grid and/or seeded random samples, on Dask",
             arguments=_args_sweep,
             description="Run SCENARIO for every combination of --grid values, times --samples random draws of "

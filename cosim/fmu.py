@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import difflib
+import functools
 import re
 import shutil
 import tempfile
@@ -46,25 +47,38 @@ __all__ = ["Fmu", "Value", "Variable", "read_description"]
 _STATUS = {0: "OK", 1: "Warning", 2: "Discard", 3: "Error", 4: "Fatal", 5: "Pending"}
 
 
-def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
-    """The model description of an FMU file (fmpy's), or :class:`FmuError` saying what is wrong with it.
+def read_description(path: str | Path, *, cosimulation: bool = True, validate: bool = True) -> Any:
+    """The model description of an FMU file (fmpy's), or :class:`ConfigurationError` saying what is wrong with it.
 
-    Unless ``cosimulation`` is false, an FMU without co-simulation (Model Exchange only) is refused
-    with :class:`ConfigurationError` saying how to export a co-simulation FMU instead.
+    A file that is not an FMU (not a zip archive, a zip without ``modelDescription.xml``, a machine
+    file) or whose model description cannot be read is refused as a configuration error naming the
+    file. With ``validate`` false, fmpy's validator (the FMI schema and the rules it checks) is not
+    applied: :func:`validation_findings` lists what it would have said. Unless ``cosimulation`` is
+    false, an FMU without co-simulation (Model Exchange only) is refused saying how to export a
+    co-simulation FMU instead.
     """
     path = Path(path)
-    if not path.exists():
-        raise ConfigurationError(f"FMU file {path} does not exist")
+    _check_is_fmu(path)
+    stat = path.stat()
+    return _read_description(str(path.resolve()), stat.st_mtime_ns, stat.st_size, cosimulation, validate)
+
+
+@functools.lru_cache(maxsize=32)
+def _read_description(path_text: str, mtime_ns: int, size: int, cosimulation: bool, validate: bool) -> Any:
+    """:func:`read_description` of one version of a file (read once: the schema check costs ~10 ms)."""
+    path = Path(path_text)
     try:
-        model = read_model_description(str(path))
+        model = read_model_description(path_text, validate=validate)
     except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
         traceback.clear_frames(exc.__traceback__)  # fmpy's frames hold the FMU's file open: close it now
-        raise FmuError(f"{path}: cannot read modelDescription.xml ({_reason(path, exc)}); "
-                       "`python -m fmpy validate` on the file lists what is wrong with it") from exc
+        problems = getattr(exc, "problems", None)
+        hint = ("; --no-validate runs it anyway (with a warning listing these findings)" if problems
+                else "; `python -m fmpy validate` on the file lists what is wrong with it")
+        raise ConfigurationError(f"{path}: cannot read modelDescription.xml ({_reason(path, exc)}){hint}") from exc
     if cosimulation and model.coSimulation is None:
-        kinds = "Model Exchange" if model.modelExchange is not None else "no co-simulation"
+        kinds = "a Model Exchange FMU" if model.modelExchange is not None else "an FMU without co-simulation"
         raise ConfigurationError(
-            f"{path.name} is a {kinds} FMU: cosim needs a co-simulation FMU (one that brings its own "
+            f"{path.name} is {kinds}: cosim needs a co-simulation FMU (one that brings its own "
             "solver, so the master can step it exactly to each instant that matters). Export it again "
             "with co-simulation enabled: most tools have it as the FMU type (OpenModelica: "
             "buildModelFMU(..., fmuType=\"cs\") or \"me_cs\"; Dymola: 'Co-simulation using Cvode' or "
@@ -72,6 +86,52 @@ def read_description(path: str | Path, *, cosimulation: bool = True) -> Any:
             "look at a Model Exchange FMU alone, fmpy.simulate_fmu runs it with its own solver.")
     _read_unsigned_ranges(path, model)
     return model
+
+
+def validation_findings(path: str | Path) -> list[str]:
+    """What fmpy's validator finds wrong with an FMU's model description (empty if nothing).
+
+    The FMI schema first (as :func:`read_description` applies it), then fmpy's rules (variabilities,
+    start values, units, model structure).
+    """
+    from fmpy.model_description import ValidationError
+    from fmpy.validation import validate_model_description
+
+    path = Path(path)
+    _check_is_fmu(path)
+    try:
+        read_model_description(str(path), validate=True)
+    except ValidationError as exc:
+        return [str(problem) for problem in exc.problems]
+    except Exception as exc:
+        traceback.clear_frames(exc.__traceback__)
+        return [f"{type(exc).__name__}: {exc}"]
+    model = read_model_description(str(path), validate=False)
+    return [str(problem) for problem in validate_model_description(model)]
+
+
+def _check_is_fmu(path: Path) -> None:
+    """Refuse, naming the file, what is not an FMU: a missing file, a folder, a file that is not a zip archive
+    holding a ``modelDescription.xml``."""
+    if not path.exists():
+        raise ConfigurationError(f"FMU file {path} does not exist")
+    if path.is_dir():
+        if (path / "modelDescription.xml").is_file():
+            return  # an unzipped FMU
+        raise ConfigurationError(f"{path} is a folder without modelDescription.xml, not an FMU")
+    what = {".toml": "a machine file (run it with `cosim run`)", ".py": "a scenario script (run it with `cosim run`)",
+            ".bas": "a program", ".csv": "a table"}.get(path.suffix.lower(), "")
+    if not zipfile.is_zipfile(path):
+        raise ConfigurationError(f"{path} is not an FMU: {what or 'not a zip archive'} (an FMU is a zip archive "
+                                 "holding modelDescription.xml)")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            names = set(archive.namelist())
+    except (OSError, zipfile.BadZipFile) as exc:
+        raise ConfigurationError(f"{path} is not an FMU: {exc}") from None
+    if "modelDescription.xml" not in names:
+        raise ConfigurationError(f"{path} is not an FMU: the zip archive has no modelDescription.xml at its top "
+                                 f"level ({len(names)} entries)")
 
 
 def _reason(path: Path, exc: Exception) -> str:
@@ -129,6 +189,9 @@ class Fmu:
         Start time [ticks].
     logging : bool
         Ask the FMU for debug logging (errors are always captured).
+    validate : bool
+        Apply fmpy's validator to the model description (default); False runs an FMU whose
+        description it flags (see :func:`validation_findings`), as fmpy's ``validate=False`` does.
 
     Attributes
     ----------
@@ -136,6 +199,9 @@ class Fmu:
         Every variable the adapter reaches (all types but clocks), with type, unit, range, shape.
     terminated : str or None
         Why the FMU ended the simulation, once it has (it then stays at :attr:`t`).
+    notes : list of str
+        What the adapter did differently from the FMU's declarations (an FMU that declares event
+        mode and refuses it runs without), for the run's notes.
 
     Examples
     --------
@@ -147,18 +213,19 @@ class Fmu:
 
     def __init__(self, path: str | Path, *, timebase: TimeBase | None = None, instance_name: str = "fmu",
                  parameters: Mapping[str, Value] | None = None, start: int = 0,
-                 logging: bool = False) -> None:
+                 logging: bool = False, validate: bool = True) -> None:
         self.path = Path(path)
         self.timebase = timebase or TimeBase()
         self.instance_name = instance_name
         self.log: deque[str] = deque(maxlen=200)
+        self.notes: list[str] = []
         self.t = start
         self.events = 0
         self.terminated: str | None = None
         self._ended: CosimError | None = None  # why it cannot step any more: terminated or closed
         self._unzipdir: str | None = None
         self._fmu: Any = None
-        self.model = read_description(self.path)
+        self.model = read_description(self.path, validate=validate)
         self.fmi_version = 3 if self.model.fmiVersion.startswith("3") else 2
         self._where = f"{instance_name} ({self.path.name})"
         self._unzipdir = tempfile.mkdtemp(prefix="cosim-fmu-")
@@ -167,12 +234,34 @@ class Fmu:
         self.early_return = self.fmi_version == 3 and bool(cs.mightReturnEarlyFromDoStep)
         self.event_mode = self.fmi_version == 3 and bool(cs.hasEventMode)
         self.variables: dict[str, Variable] = {}
-        self._instantiate(logging)
-        self._resolve()
+        for sv in self.model.modelVariables:
+            var = Variable.from_model(sv, self.fmi_version)
+            if var is not None:
+                self.variables[var.name] = var
         values = {name: self.variable(name).check(value, where=self._where)
                   for name, value in (parameters or {}).items()}
-        self._call("initialise", self._initialise, values)
+        try:
+            self._start_instance(logging, values)
+        except _EventModeRefused as refused:
+            # fmpy runs such an FMU without event mode (its default): so does cosim, and says so
+            self._free_instance()
+            self.event_mode = False
+            self.notes.append(f"{self._where} declares event mode (hasEventMode) but refused it ({refused}); it "
+                              "runs without event mode: events inside a step are handled at its end")
+            self._start_instance(logging, values)
         self._prepare_step()
+
+    def _start_instance(self, logging: bool, values: dict[str, Any]) -> None:
+        """Instantiate, prepare the accessors and initialise (raises _EventModeRefused for a refused event mode)."""
+        self._instantiate(logging)
+        self._resolve()
+        self._call("initialise", self._initialise, values)
+
+    def _free_instance(self) -> None:
+        fmu, self._fmu = self._fmu, None
+        if fmu is not None and getattr(fmu, "component", None):
+            with contextlib.suppress(Exception):
+                fmu.freeInstance()
 
     # -- setup ------------------------------------------------------------------------------
     def _instantiate(self, logging: bool) -> None:
@@ -197,6 +286,8 @@ class Fmu:
                 self._fmu.instantiate(loggingOn=logging, eventModeUsed=self.event_mode,
                                       earlyReturnAllowed=self.early_return, logMessage=self._log_fmi3)
         except Exception as exc:
+            if self.event_mode:
+                raise _EventModeRefused(f"instantiation with eventModeUsed = true failed: {exc}") from exc
             self._cleanup()
             raise FmuError(f"{self.instance_name}: instantiation of {self.path.name} failed: {exc}",
                            self.log) from exc
@@ -214,11 +305,8 @@ class Fmu:
         self.log.append(f"[{_STATUS.get(status, status)}] {cat}: {text}")
 
     def _resolve(self) -> None:
-        for sv in self.model.modelVariables:
-            var = Variable.from_model(sv, self.fmi_version)
-            if var is not None:
-                var.get, var.set = self._accessors(var)
-                self.variables[var.name] = var
+        for var in self.variables.values():
+            var.get, var.set = self._accessors(var)
 
     def _function(self, name: str) -> Callable[..., int]:
         """The FMI function ``name`` taking ctypes arguments and returning its status."""
@@ -260,9 +348,14 @@ class Fmu:
             self._fmu.enterInitializationMode(startTime=t0)
             self._fmu.exitInitializationMode()
             if self.event_mode:
-                if self._settle_events():
+                try:
+                    asked = self._settle_events()
+                    if not asked:
+                        self._fmu.enterStepMode()
+                except (FMICallException, FmuError) as exc:
+                    raise _EventModeRefused(f"the initial event mode failed: {exc}") from exc
+                if asked:
                     self._end(self.t, "asked to terminate in event mode during initialisation")
-                self._fmu.enterStepMode()
 
     # -- access -----------------------------------------------------------------------------
     def variable(self, name: str) -> Variable:
@@ -319,16 +412,27 @@ class Fmu:
         return None if address is None else ctypes.CFUNCTYPE(ctypes.c_int)(address)
 
     def _prepare_step(self) -> None:
+        """Prepare :meth:`advance_to`'s common case: one doStep without event, early return or termination.
+
+        The step's arguments are ctypes objects made once; the float times are those of
+        :meth:`TimeBase.seconds` (``ticks / 10**9`` at 1 ns, correctly rounded). Anything else
+        (an event, an early return, a terminate request, a Discard or Error status, going back in
+        time, an ended FMU) goes through the general path, :meth:`_advance_general`.
+        """
         self._event = ctypes.c_bool()
         self._terminate = ctypes.c_bool()
         self._early = ctypes.c_bool()
         self._last = ctypes.c_double()
         do_step = self._bare(f"fmi{self.fmi_version}DoStep")
+        self._advance: Callable[[int], int] = self._advance_general
         if do_step is None:
             self._do_step = self._do_step_fmpy
             return
         t_arg, h_arg = ctypes.c_double(), ctypes.c_double()
         component = ctypes.c_void_p(self._fmu.component)
+        resolution = self.timebase.resolution_s
+        per_second = resolution.denominator if resolution.numerator == 1 else 0
+        seconds, general, finish = self.timebase.seconds, self._advance_general, self._finish
         if self.fmi_version == 2:
             args2 = (component, t_arg, h_arg, ctypes.c_int(1))
 
@@ -337,18 +441,48 @@ class Fmu:
                 h_arg.value = h_s
                 return do_step(*args2), False, False, False, t_s + h_s
 
-            self._do_step = do_step2
-        else:
-            event, terminate, early, last = self._event, self._terminate, self._early, self._last
-            args3 = (component, t_arg, h_arg, ctypes.c_bool(True), ctypes.byref(event), ctypes.byref(terminate),
-                     ctypes.byref(early), ctypes.byref(last))
-
-            def do_step3(t_s: float, h_s: float) -> tuple[int, bool, bool, bool, float]:
+            def advance2(t: int) -> int:
+                now = self.t
+                if t <= now or self._ended is not None:
+                    return general(t)
+                t_s, h_s = (now / per_second, (t - now) / per_second) if per_second else (seconds(now),
+                                                                                           seconds(t - now))
                 t_arg.value = t_s
                 h_arg.value = h_s
-                return do_step(*args3), event.value, terminate.value, early.value, last.value
+                status = do_step(*args2)
+                if status > 1:
+                    return finish(t, t_s, h_s, (status, False, False, False, t_s + h_s))
+                self.t = t
+                return t
 
-            self._do_step = do_step3
+            self._do_step = do_step2
+            self._advance = advance2
+            return
+        event, terminate, early, last = self._event, self._terminate, self._early, self._last
+        args3 = (component, t_arg, h_arg, ctypes.c_bool(True), ctypes.byref(event), ctypes.byref(terminate),
+                 ctypes.byref(early), ctypes.byref(last))
+        event_mode = self.event_mode
+
+        def do_step3(t_s: float, h_s: float) -> tuple[int, bool, bool, bool, float]:
+            t_arg.value = t_s
+            h_arg.value = h_s
+            return do_step(*args3), event.value, terminate.value, early.value, last.value
+
+        def advance3(t: int) -> int:
+            now = self.t
+            if t <= now or self._ended is not None:
+                return general(t)
+            t_s, h_s = (now / per_second, (t - now) / per_second) if per_second else (seconds(now), seconds(t - now))
+            t_arg.value = t_s
+            h_arg.value = h_s
+            status = do_step(*args3)
+            if status > 1 or terminate.value or early.value or (event_mode and event.value):
+                return finish(t, t_s, h_s, (status, event.value, terminate.value, early.value, last.value))
+            self.t = t
+            return t
+
+        self._do_step = do_step3
+        self._advance = advance3
 
     def _do_step_fmpy(self, t_s: float, h_s: float) -> tuple[int, bool, bool, bool, float]:
         if self.fmi_version == 2:
@@ -360,9 +494,14 @@ class Fmu:
     def _step(self, t_s: float, h_s: float) -> tuple[bool, str, bool, float]:
         """One doStep: (event, why the FMU asks to terminate or "", early return, last successful time [s])."""
         try:
-            status, event, terminate, early, last = self._do_step(t_s, h_s)
+            outcome = self._do_step(t_s, h_s)
         except FMICallException as exc:
-            status, event, terminate, early, last = exc.status, False, False, False, t_s
+            outcome = (exc.status, False, False, False, t_s)
+        return self._interpret(t_s, h_s, outcome)
+
+    def _interpret(self, t_s: float, h_s: float,
+                   outcome: tuple[int, bool, bool, bool, float]) -> tuple[bool, str, bool, float]:
+        status, event, terminate, early, last = outcome
         if status == 2:  # Discard: the FMU could not (or would not) go on
             return False, self._discarded(t_s, h_s, last), False, self._last_successful(last)
         if status > 1:
@@ -391,27 +530,102 @@ class Fmu:
             return self.timebase.seconds(self.t)
 
     def reader(self, names: list[str]) -> Callable[[], list[Value]]:
-        """A function returning the current values of ``names`` (one FMI call when all are Float64 scalars)."""
-        variables = [self.variable(name) for name in names]
-        get = self._bare("fmi2GetReal" if self.fmi_version == 2 else "fmi3GetFloat64")
-        if get is None or not variables or any(v.kind.name != "Float64" or v.shape for v in variables):
-            return lambda: [v.get() for v in variables]
-        n = len(variables)
-        vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
-        values = (ctypes.c_double * n)()
-        size = ctypes.c_size_t(n)
-        args = (ctypes.c_void_p(self._fmu.component), vrs, size, values) + (() if self.fmi_version == 2 else (size,))
+        """A function returning the current values of ``names``, prepared once (see :meth:`sampler`)."""
+        values: list[Value] = [0.0] * len(names)
+        sinks = [partial(_put, values, i) for i in range(len(names))]
+        fill = self.sampler(names, sinks)
 
         def read() -> list[Value]:
-            if self._fmu is None:
-                raise FmuError(f"{self._where} is closed (its simulation has ended)")
-            status = get(*args)
-            if status > 1:
-                raise FmuError(f"{self.instance_name} ({self.path.name}) at t={self.t} ticks: reading "
-                               f"{', '.join(names)} failed with status {_STATUS.get(status, status)}", self.log)
+            fill(0)
             return list(values)
 
         return read
+
+    def sampler(self, names: Sequence[str], sinks: Sequence[Callable[[int, Any], None]]) -> Callable[[int], None]:
+        """A function ``fill(t)`` that reads ``names`` and passes each value to its sink: ``sinks[i](t, value)``.
+
+        Prepared once, for the master's sampling: scalars of the numeric and Boolean types are read
+        with one FMI call per type (Float64, Int32, Boolean outputs: three calls) into buffers made
+        once, and their values go to the sinks as ctypes gives them (``float``, ``int``, ``bool``;
+        FMI 2.0 Booleans as 0/1), without a list in between. Strings, binaries and arrays are read
+        as :meth:`get` does (an array as a numpy array).
+        """
+        variables = [self.variable(name) for name in names]
+        if len(sinks) != len(variables):
+            raise ConfigurationError(f"{self.instance_name}: {len(sinks)} sinks for {len(variables)} variables")
+        groups: dict[str, list[int]] = {}
+        for i, var in enumerate(variables):
+            if var.kind.is_numeric and not var.shape:
+                groups.setdefault(var.kind.function, []).append(i)
+        getters = {function: self._bare(f"fmi{self.fmi_version}Get{function}") for function in groups}
+        if any(get is None for get in getters.values()):
+            groups = {}
+        component = ctypes.c_void_p(self._fmu.component)
+        calls = []
+        for function, indices in groups.items():
+            n = len(indices)
+            vrs = (ctypes.c_uint32 * n)(*[variables[i].vr for i in indices])
+            size = ctypes.c_size_t(n)
+            buffer = (variables[indices[0]].kind.ctype * n)()
+            args = (component, vrs, size, buffer) + (() if self.fmi_version == 2 else (size,))
+            calls.append((getters[function], args, buffer, tuple(sinks[i] for i in indices)))
+        grouped = {i for indices in groups.values() for i in indices}
+        others = [(variables[i].get, sinks[i]) for i in range(len(variables)) if i not in grouped]
+        where = f"{self.instance_name} ({self.path.name})"
+
+        def closed() -> FmuError:
+            return FmuError(f"{self._where} is closed (its simulation has ended)")
+
+        def failed(status: int) -> FmuError:
+            return FmuError(f"{where} at t={self.t} ticks: reading {', '.join(names)} failed with status "
+                            f"{_STATUS.get(status, status)}", self.log)
+
+        if len(calls) == 1 and not others:  # one type (e.g. all Float64): one call
+            get, args, buffer, group_sinks = calls[0]
+
+            def fill_one_type(t: int) -> None:
+                if self._fmu is None:
+                    raise closed()
+                status = get(*args)
+                if status > 1:
+                    raise failed(status)
+                for sink, value in zip(group_sinks, buffer, strict=True):
+                    sink(t, value)
+
+            return fill_one_type
+
+        def fill(t: int) -> None:
+            if self._fmu is None:
+                raise closed()
+            for get, args, buffer, group_sinks in calls:
+                status = get(*args)
+                if status > 1:
+                    raise failed(status)
+                for sink, value in zip(group_sinks, buffer, strict=True):
+                    sink(t, value)
+            for get_one, sink in others:
+                sink(t, get_one())
+
+        return fill
+
+    def block_sampler(self, names: Sequence[str], sinks: Sequence[Callable[[Any, Any], None]], *,
+                      rows: int = 1024) -> BlockSampler | None:
+        """A :class:`BlockSampler` of ``names``, or None if one of them is not a numeric or Boolean scalar.
+
+        ``sinks[i](t, values)`` receives the samples of variable ``i`` in blocks: numpy arrays of the
+        ticks (int64) and of the values (the variable's C type), at most ``rows`` at a time.
+        """
+        variables = [self.variable(name) for name in names]
+        if not variables or any(not v.kind.is_numeric or v.shape for v in variables) or len(sinks) != len(variables):
+            return None
+        groups: dict[str, list[int]] = {}
+        for i, var in enumerate(variables):
+            groups.setdefault(var.kind.function, []).append(i)
+        getters = {function: self._bare(f"fmi{self.fmi_version}Get{function}") for function in groups}
+        if any(get is None for get in getters.values()):
+            return None
+        return BlockSampler(self, [(getters[function], [variables[i] for i in indices],
+                                    [sinks[i] for i in indices]) for function, indices in groups.items()], rows=rows)
 
     def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
         """A function setting ``names`` (all Float64/Real scalar inputs) to its argument's values in one FMI call.
@@ -488,6 +702,43 @@ class Fmu:
 
         return write
 
+    def array_reader(self, name: str, out: Any) -> Callable[[], None]:
+        """A function reading the array variable ``name`` into ``out`` in one FMI call (prepared once).
+
+        ``out`` is a C-contiguous numpy array of the variable's C type (float64 for Float64, int32
+        for Int32...) with as many elements as the variable; FMI 3.0 only. A status above Warning
+        raises :class:`FmuError`.
+        """
+        import numpy as np
+
+        var = self.variable(name)
+        if not var.shape or self.fmi_version != 3 or not var.kind.is_numeric:
+            raise ConfigurationError(f"{self.instance_name}: array_reader() takes a numeric array of an FMI 3.0 FMU; "
+                                     f"got {var.name} ({var.type}{var.dimensions}, FMI {self.fmi_version}.0)")
+        if not (isinstance(out, np.ndarray) and out.dtype == np.dtype(var.kind.ctype) and out.flags.c_contiguous
+                and out.size == var.size):
+            raise ConfigurationError(f"{self.instance_name}: array_reader({name!r}) needs a C-contiguous numpy array "
+                                     f"of {var.size} {np.dtype(var.kind.ctype)} elements")
+        get = self._bare(f"fmi3Get{var.kind.function}")
+        if get is None:
+            def read_slowly() -> None:
+                out[...] = np.asarray(var.get()).reshape(out.shape)
+
+            return read_slowly
+        size = ctypes.c_size_t(var.size)
+        args = (ctypes.c_void_p(self._fmu.component), (ctypes.c_uint32 * 1)(var.vr), ctypes.c_size_t(1),
+                ctypes.c_void_p(out.ctypes.data), size)
+
+        def read() -> None:
+            if self._fmu is None:
+                raise FmuError(f"{self._where} is closed (its simulation has ended)")
+            status = get(*args)
+            if status > 1:
+                raise FmuError(f"{self._where} at t={self.t} ticks: reading {name} failed with status "
+                               f"{_STATUS.get(status, status)}", self.log)
+
+        return read
+
     def advance_to(self, t: int) -> int:
         """Advance the FMU to tick ``t``; returns the tick it reached.
 
@@ -501,6 +752,13 @@ class Fmu:
             The FMU asked to end the simulation in this step (or did so before): it is terminated
             at the first whole tick at or after that instant, which the exception carries.
         """
+        return self._advance(t)
+
+    def stepper(self) -> Callable[[int], int]:
+        """:meth:`advance_to` as a bound function, prepared once (for the master's hot loops)."""
+        return self._advance
+
+    def _advance_general(self, t: int) -> int:
         if self._ended is not None:
             raise self._ended
         if t == self.t:
@@ -509,7 +767,15 @@ class Fmu:
             raise FmuError(f"{self.instance_name} is at t={self.t} ticks and cannot go back to t={t}")
         t_from = self.timebase.seconds(self.t)
         h = self.timebase.seconds(t - self.t)
-        event, terminate, early, t_last = self._step(t_from, h)
+        try:
+            outcome = self._do_step(t_from, h)
+        except FMICallException as exc:
+            outcome = (exc.status, False, False, False, t_from)
+        return self._finish(t, t_from, h, outcome)
+
+    def _finish(self, t: int, t_from: float, h: float, outcome: tuple[int, bool, bool, bool, float]) -> int:
+        """The rest of a step to ``t`` taken from ``t_from`` by ``h`` [s]: events, early return, termination."""
+        event, terminate, early, t_last = self._interpret(t_from, h, outcome)
         t_event = min(max(self.timebase.ticks_from_seconds_ceil(t_last), self.t), t) if early or terminate else t
         if terminate:
             self._end(t_event, terminate)
@@ -596,3 +862,70 @@ class Fmu:
 
 def _refuse(error: Exception, *args: Any) -> Any:
     raise error
+
+
+class BlockSampler:
+    """Samples of an FMU's numeric outputs taken into blocks, handed on a block at a time.
+
+    Made by :meth:`Fmu.block_sampler`. :meth:`take` reads every variable at tick ``t`` with one FMI
+    call per type, the getter writing straight into the next row of a numpy block (no Python value
+    is made per variable); :meth:`flush` hands each variable's samples so far to its sink. The
+    master flushes before anything else can look at the trace, so a block is never seen half full.
+    """
+
+    def __init__(self, fmu: Fmu, groups: list[tuple[Any, list[Variable], list[Callable[[Any, Any], None]]]], *,
+                 rows: int) -> None:
+        import numpy as np
+
+        self.fmu = fmu
+        self.rows = rows
+        self.count = 0
+        self.times = np.zeros(rows, dtype=np.int64)
+        component = ctypes.c_void_p(fmu._fmu.component)
+        #: per row, the calls that read into it: (getter, its arguments with that row's address)
+        self._rows: list[list[tuple[Any, tuple[Any, ...]]]] = [[] for _ in range(rows)]
+        self._blocks: list[tuple[Any, list[Callable[[Any, Any], None]]]] = []
+        for get, variables, sinks in groups:
+            n = len(variables)
+            block = np.zeros((rows, n), dtype=np.dtype(variables[0].kind.ctype))
+            size = ctypes.c_size_t(n)
+            vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
+            tail: tuple[Any, ...] = () if fmu.fmi_version == 2 else (size,)
+            for i, calls in enumerate(self._rows):
+                calls.append((get, (component, vrs, size, ctypes.c_void_p(block[i].ctypes.data), *tail)))
+            self._blocks.append((block, sinks))
+        self._names = ", ".join(v.name for _, variables, _ in groups for v in variables)
+
+    def take(self, t: int) -> None:
+        """Read every variable now, as the sample at tick ``t``."""
+        fmu = self.fmu
+        if fmu._fmu is None:
+            raise FmuError(f"{fmu._where} is closed (its simulation has ended)")
+        i = self.count
+        for get, args in self._rows[i]:
+            status = get(*args)
+            if status > 1:
+                raise FmuError(f"{fmu._where} at t={fmu.t} ticks: reading {self._names} failed with status "
+                               f"{_STATUS.get(status, status)}", fmu.log)
+        self.times[i] = t
+        self.count = i + 1
+        if self.count == self.rows:
+            self.flush()
+
+    def flush(self) -> None:
+        """Hand the samples taken so far to the sinks (in time order), and start a new block."""
+        n, self.count = self.count, 0
+        if not n:
+            return
+        times = self.times[:n].copy()
+        for block, sinks in self._blocks:
+            for j, sink in enumerate(sinks):
+                sink(times, block[:n, j].copy())
+
+
+def _put(values: list[Any], i: int, t: int, value: Any) -> None:
+    values[i] = value
+
+
+class _EventModeRefused(Exception):
+    """The FMU declares event mode and refused it at instantiation or in the initial event mode."""

@@ -92,6 +92,7 @@ class Variable:
     dimensions: tuple[int, ...] = ()
     declared_type: str = ""
     items: tuple[str, ...] = ()
+    discrete: bool = False
 
     @property
     def variability(self) -> str:
@@ -99,7 +100,7 @@ class Variable:
             return "tunable" if self.tunable else "fixed"
         if self.causality == "calculatedParameter":
             return "fixed"
-        return "continuous" if self.type in _FLOATS else "discrete"
+        return "continuous" if self.type in _FLOATS and not self.discrete else "discrete"
 
     @property
     def size(self) -> int:
@@ -200,7 +201,7 @@ def _variable(path: Path, vr: int, raw: dict[str, Any], enumerations: dict[str, 
     if causality in ("parameter", "input") and "start" not in raw:
         raise ConfigurationError(f"{where}: a {causality} needs a start value")
     known = {"name", "type", "causality", "description", "unit", "start", "min", "max", "positive", "tunable",
-             "dimensions", "declared_type"}
+             "dimensions", "declared_type", "variability"}
     unknown = sorted(set(raw) - known)
     if unknown:
         raise ConfigurationError(f"{where}: unknown keys {', '.join(unknown)} (known: {', '.join(sorted(known))})")
@@ -209,6 +210,10 @@ def _variable(path: Path, vr: int, raw: dict[str, Any], enumerations: dict[str, 
         raise ConfigurationError(f"{where}: dimensions {list(dimensions)} are not allowed (allowed: positive "
                                  "integers, for numeric and Boolean variables)")
     declared_type = raw.get("declared_type", "")
+    variability = raw.get("variability", "")
+    if variability and (variability != "discrete" or type_ not in _FLOATS or causality not in ("input", "output")):
+        raise ConfigurationError(f"{where}: variability {variability!r} is not allowed (allowed: \"discrete\", for a "
+                                 "Float32 or Float64 input or output; the others follow from type and causality)")
     items: tuple[str, ...] = ()
     if type_ == "Enumeration":
         if declared_type not in enumerations:
@@ -219,7 +224,7 @@ def _variable(path: Path, vr: int, raw: dict[str, Any], enumerations: dict[str, 
                         description=raw.get("description", ""), unit=unit, start=raw.get("start"),
                         min=raw.get("min"), max=raw.get("max"), positive=bool(raw.get("positive", False)),
                         tunable=bool(raw.get("tunable", False)), dimensions=dimensions,
-                        declared_type=declared_type, items=items)
+                        declared_type=declared_type, items=items, discrete=variability == "discrete")
     _check_starts(where, variable)
     return variable
 

@@ -1,26 +1,21 @@
-"""One FMU on its own: what is in it (``cosim fmu-info``) and a quick run (``cosim run-fmu``).
+"""One FMU on its own: what is in it (``cosim fmu-info``); the quick run (``cosim run-fmu``) is :mod:`cosim.fmurun`.
 
 :func:`fmu_info` reads an FMU file without instantiating it: FMI version, interfaces, variables
 (type, causality, variability, unit, start, range, dimensions), default experiment, the platforms
-it has binaries for, and which couplings it can serve: each coupling's roles
+it has binaries for, what fmpy's validator finds wrong with its model description (an FMU it flags
+is still described), and which couplings it can serve: each coupling's roles
 (:mod:`cosim.couplings`) are looked up among its variables, so the answer says which roles are
 found under the bundled FMUs' names and which need a ``variables={role: name}`` mapping.
-
-:func:`run_fmu` simulates one FMU alone with the master, like fmpy's ``simulate_fmu``: start
-values from ``--set``, every numeric output recorded on a grid (0, step, 2 step, ... and the end),
-written as the usual result folder by :func:`cosim.runner.run_scenario`.
 """
 
 from __future__ import annotations
 
-import re
 import zipfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmuvars import Variable, fmi_type
 
 _INTERFACES = (("coSimulation", "CoSimulation"), ("modelExchange", "ModelExchange"),
@@ -42,6 +37,7 @@ class FmuInfo:
     platforms: list[str]
     has_sources: bool
     couplings: dict[str, dict[str, Any]] = field(default_factory=dict)
+    validation: list[str] = field(default_factory=list)
 
     @property
     def co_simulation(self) -> bool:
@@ -52,15 +48,16 @@ class FmuInfo:
                 "description": self.description, "generation_tool": self.generation_tool,
                 "interfaces": self.interfaces, "default_experiment": self.default_experiment,
                 "platforms": self.platforms, "has_sources": self.has_sources, "variables": self.variables,
-                "couplings": self.couplings}
+                "couplings": self.couplings, "validation": self.validation}
 
 
 def fmu_info(path: str | Path) -> FmuInfo:
     """Read an FMU file's model description and list of files (nothing is instantiated)."""
-    from cosim.fmu import read_description
+    from cosim.fmu import read_description, validation_findings
 
     path = Path(path)
-    model = read_description(path, cosimulation=False)
+    model = read_description(path, cosimulation=False, validate=False)
+    findings = validation_findings(path)
     version = 3 if model.fmiVersion.startswith("3") else 2
     interfaces = {}
     for attribute, name in _INTERFACES:
@@ -78,7 +75,7 @@ def fmu_info(path: str | Path) -> FmuInfo:
     platforms, sources = _files(path)
     return FmuInfo(path, model.fmiVersion, model.modelName or "", model.description or "",
                    model.generationTool or "", interfaces, rows, default, platforms, sources,
-                   couplings_served({row["name"]: row for row in rows if row["supported"]}))
+                   couplings_served({row["name"]: row for row in rows if row["supported"]}), findings)
 
 
 def _float(value: Any) -> float | None:
@@ -153,6 +150,9 @@ def format_info(info: FmuInfo) -> str:
     lines.append(f"  default experiment: {experiment or 'none'}")
     lines.append(f"  platforms: {', '.join(info.platforms) or 'none'}"
                  + ("; sources included" if info.has_sources else ""))
+    if info.validation:
+        lines.append(f"  fmpy's validator finds {len(info.validation)} problem(s) (run-fmu needs --no-validate):")
+        lines += [f"    {problem}" for problem in info.validation]
     lines.append("")
     head = ("name", "type", "causality", "variability", "unit", "start", "range", "dims")
     rows = [head] + [(v["name"], v["type"] + ("" if v["supported"] else "*"), v["causality"],
@@ -188,103 +188,10 @@ def _range(v: Mapping[str, Any]) -> str:
     return f"{'' if low is None else low}..{'' if high is None else high}"
 
 
-# -- run-fmu ----------------------------------------------------------------------------------------
-def trace_names(variables: list[str], prefix: str) -> dict[str, str]:
-    """Trace signal names for FMU variables: ``<prefix>.<name>``, lower case, other characters as ``_``."""
-    names: dict[str, str] = {}
-    for variable in variables:
-        parts = [re.sub(r"[^a-z0-9_]", "_", part.lower()) or "_" for part in re.split(r"\.", variable)]
-        name = ".".join([prefix, *parts])
-        base, n = name, 2
-        while name in names.values():
-            name, n = f"{base}_{n}", n + 1
-        names[variable] = name
-    return names
+def __getattr__(name: str) -> Any:
+    """``run_fmu``, ``trace_names`` and ``plant_name`` moved to :mod:`cosim.fmurun` (still reachable here)."""
+    if name in ("run_fmu", "trace_names", "plant_name"):
+        from cosim import fmurun
 
-
-def plant_name(path: Path) -> str:
-    """A device name for the trace from the FMU file's name (``TypesTest.fmu`` -> ``typestest``)."""
-    name = re.sub(r"[^a-z0-9_]", "_", path.stem.lower())
-    return name if re.match(r"[a-z]", name) else f"fmu_{name}"
-
-
-def run_fmu(path: str | Path, *, sets: Mapping[str, str] | None = None, until: str | None = None,
-            step: str | None = None, out: str | Path | None = None,
-            formats: tuple[str, ...] = ("vcd", "parquet"), progress: bool = False) -> Any:
-    """Simulate one FMU alone and write the usual result folder (returns the :class:`~cosim.runner.Result`).
-
-    Parameters
-    ----------
-    path : path
-        The ``.fmu`` file (co-simulation).
-    sets : mapping name -> text, optional
-        Start values of parameters and inputs (``--set``), parsed by each variable's type.
-    until : str, optional
-        End time with unit (default: the FMU's default experiment stop time, else 1 s).
-    step : str, optional
-        Output grid with unit (default: the default experiment step, else 1/500 of the run).
-    out : path, optional
-        Results folder.
-    formats : tuple of str
-        Trace files to write (see :func:`cosim.export.write_trace`).
-    progress : bool
-        Show a progress bar for runs longer than two seconds (on a terminal only).
-
-    Notes
-    -----
-    The run starts at 0 s (a default experiment's start time is not used). Integer, Boolean and
-    enumeration outputs are recorded as numbers; strings and binaries are not recorded.
-    """
-    from cosim.fmu import read_description
-    from cosim.runner import run_scenario
-    from cosim.scenario import Param, Run, ScenarioFile
-    from cosim.timebase import TimeBase
-
-    path = Path(path)
-    model = read_description(path)
-    version = 3 if model.fmiVersion.startswith("3") else 2
-    variables = {sv.name: var for sv in model.modelVariables
-                 if (var := Variable.from_model(sv, version)) is not None}
-    where = f"--set of {path.name}"
-    values: dict[str, Any] = {}
-    for name, text in (sets or {}).items():
-        if name not in variables:
-            import difflib
-
-            close = difflib.get_close_matches(name, list(variables), n=3)
-            raise ConfigurationError(f"{where}: {path.name} has no variable named {name!r}"
-                                     + (f"; did you mean {', '.join(close)}?" if close else ""))
-        if variables[name].causality not in ("parameter", "input"):
-            raise ConfigurationError(f"{where}: {name} is an {variables[name].causality}; --set takes parameters "
-                                     "and inputs")
-        values[name] = variables[name].parse(text, where=where)
-    experiment = model.defaultExperiment
-    timebase = TimeBase()
-    stop_s = float(experiment.stopTime) if experiment is not None and experiment.stopTime else 1.0
-    end = timebase.ticks(until, name="until") if until is not None else timebase.ticks_from_seconds_ceil(stop_s)
-    if step is not None:
-        period = timebase.ticks(step, name="step")
-    elif experiment is not None and experiment.stepSize:
-        period = timebase.ticks_from_seconds_ceil(float(experiment.stepSize))
-    else:
-        period = max(1, end // 500)
-    timebase.check_ticks(period, name="step", minimum=1)
-    outputs = [name for name, var in variables.items() if var.causality == "output" and var.kind.is_numeric]
-    device = plant_name(path)
-    names = trace_names(outputs, device)
-
-    def scenario(run: Run) -> None:
-        plant = run.plant(path, name=device, parameters=values)
-        sample = plant.record(names, period=period, at_events=False)  # the grid alone, as simulate_fmu
-        try:
-            run.run_until(run.until)
-        except PlantTerminated:
-            sample()  # the instant the FMU stopped at, as fmpy's simulate_fmu records it
-            raise
-        sample()  # the end instant too
-
-    params = tuple(Param(name, value if isinstance(value, bool | int | float | str) else text, variables[name].unit)
-                   for (name, value), text in zip(values.items(), (sets or {}).values(), strict=True))
-    scenario_file = ScenarioFile(name=device, path=path.resolve(), description=f"{path.name} alone",
-                                 parameters=params, until=end, function=scenario)
-    return run_scenario(scenario_file, until=end, out=out, formats=formats, progress=progress)
+        return getattr(fmurun, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -31,7 +31,7 @@ import ctypes
 import math
 import numbers
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -380,3 +380,45 @@ def _binary_accessors(var: Variable, get_fn: Status, set_fn: Status, component: 
             raise failed(f"set {var.name}", status)
 
     return get, put
+
+
+# -- trace names ------------------------------------------------------------------------------------
+_NOT_IN_A_PART = re.compile(r"[^a-z0-9_]")
+
+
+def _fold(variable: str) -> str:
+    """``Float64_out`` -> ``float64_out``, ``der(x)`` -> ``der_x_``, ``a.B[1]`` -> ``a.b_1_``."""
+    return ".".join(_NOT_IN_A_PART.sub("_", part.lower()) or "_" for part in variable.split("."))
+
+
+def trace_names(variables: Sequence[str], prefix: str, *, order: Sequence[str] | None = None) -> dict[str, str]:
+    """Trace signal names for FMU variables, one each: never the same name for two variables.
+
+    The trace's names are lower case, dot-separated, each part ``[a-z0-9_]`` (:mod:`cosim.trace`);
+    FMU variable names are not. A variable gets ``<prefix>.<name>`` with each dot-separated part of
+    its name in lower case and every other character than ``[a-z0-9_]`` as ``_``
+    (``Float64_continuous_output`` -> ``float64_continuous_output``, ``der(x)`` -> ``der_x_``).
+    Where that gives several variables one name (names that differ only in case, ``x`` and ``X``,
+    or in such characters, ``a(1)`` and ``a_1_``), the one whose name is already in the scheme keeps
+    it and every other gets ``_v<n>``, ``n`` being its position (from 1) among the model
+    description's variables (``order``; default: ``variables``), e.g. ``X`` -> ``x_v7``. The name
+    of a variable depends only on the FMU, not on which variables are asked for or in which order.
+
+    Examples
+    --------
+    >>> trace_names(["Speed", "speed", "der(x)"], "m")
+    {'Speed': 'm.speed_v1', 'speed': 'm.speed', 'der(x)': 'm.der_x_'}
+    """
+    positions = {name: i for i, name in enumerate(order if order is not None else variables, start=1)}
+    names = {v: f"{prefix}.{_fold(v)}" for v in variables}
+    while True:
+        taken: dict[str, list[str]] = {}
+        for variable, name in names.items():
+            taken.setdefault(name, []).append(variable)
+        clashes = {name: group for name, group in taken.items() if len(group) > 1}
+        if not clashes:
+            return names
+        for name, group in clashes.items():
+            for variable in group:
+                if name != f"{prefix}.{variable}":  # a changed name moves; an unchanged one keeps its name
+                    names[variable] = f"{name}_v{positions[variable]}"

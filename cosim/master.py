@@ -21,7 +21,14 @@ instant an input changes through :meth:`Plant.drive` or :meth:`Plant.set` (a gat
 command), once per instant after everything else there, and at the plant's events (an early
 return, a watched output changing). Inputs set on a coupling's hot path (:meth:`Plant.setter`,
 :meth:`Plant.ahead_writer`: a stepper's rate or its per-slot pulse segments) add no samples. These
-samples cost no FMU step: the plant is at that instant already.
+samples cost no FMU step: the plant is at that instant already. A grid sample costs one, unless the
+plant takes samples inside its own steps (:mod:`cosim.sampleschedule`: the Laser does for power and
+energy): then the samples ride inside the steps the plant makes anyway, bit-identical.
+
+The calls are prepared once: a step is one ctypes call with arguments made at load
+(:meth:`cosim.fmu.Fmu.stepper`), a sample one getter call per FMI type; samples taken in a row,
+with nothing else due between them, are read into numpy blocks and handed to the trace when the
+row ends (:class:`cosim.fmu.BlockSampler`).
 
 Every FMI variable type can be read and set (:mod:`cosim.fmuvars`: arrays as numpy arrays);
 numeric and Boolean outputs can be recorded (an array as one trace signal per element,
@@ -40,12 +47,14 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
+from cosim import sampleschedule
 from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmu import Fmu, Value
+from cosim.fmuvars import trace_names
 from cosim.kernel import At, Simulation
 from cosim.signals import Signal
 from cosim.timebase import Priority
@@ -106,8 +115,12 @@ class Plant:
         self._watched: dict[str, Signal] = {}
         self._pending: dict[str, float] = {}
         self._before_step: list[Callable[[int], None]] = []
+        self._after_step: list[Callable[[int], None]] = []
         self._samplers: list[Callable[[int], None]] = []  # record the sampled outputs at the plant's tick
         self._sample_at = -1  # the tick of the latest sample asked for by an input change or an event
+        self._step = fmu.stepper()
+        for note in fmu.notes:
+            sim.notes.add(note)
         sim.on_close(fmu.close)
 
     @classmethod
@@ -150,13 +163,22 @@ class Plant:
     def _advance_to(self, t: int) -> None:
         for hook in self._before_step:
             hook(t)
-        reached = self.fmu.advance_to(t)
+        reached = self._step(t)
         self.steps += 1
+        for hook in self._after_step:
+            hook(reached)
+        if reached < t:
+            self._resume(t, reached)
+
+    def _resume(self, t: int, reached: int) -> None:
+        """The rest of a step to ``t`` that returned early at ``reached`` (an event of the plant's own)."""
         while reached < t:  # early return at an event: sample there, go on (watched plants never lag now)
             for take in self._samplers:
                 take(reached)
-            reached = self.fmu.advance_to(t)
+            reached = self._step(t)
             self.steps += 1
+            for hook in self._after_step:
+                hook(reached)
 
     def _sample_soon(self, t: int) -> None:
         """Sample the recorded outputs at tick ``t`` (now or later), after everything else at that tick."""
@@ -222,6 +244,15 @@ class Plant:
         """
         self._before_step.append(hook)
 
+    def after_step(self, hook: Callable[[int], None]) -> None:
+        """Call ``hook(t)`` just after every step of the FMU, with the tick ``t`` it reached.
+
+        For inputs that follow a function of time (an input table's interpolated columns,
+        :mod:`cosim.fmuinput`): the hook sets them to their value at ``t``, which the FMU then holds
+        over its next step, and which an output read at ``t`` already sees. Such inputs add no samples.
+        """
+        self._after_step.append(hook)
+
     def ahead_writer(self, variable: str, values: np.ndarray) -> Callable[[], None]:
         """A function writing the contents of ``values`` to the Float64 array input ``variable``, without advancing.
 
@@ -256,7 +287,8 @@ class Plant:
         Parameters
         ----------
         variables : sequence of str or mapping FMU variable -> trace signal name
-            A plain list is recorded as ``<plant>.<variable>``.
+            A plain list is recorded as ``<plant>.<variable>``, the name in the trace's scheme
+            (lower case; see :func:`cosim.fmuvars.trace_names`).
         period : int
             Sample period [ticks] (> 0).
         start : int, optional
@@ -271,44 +303,71 @@ class Plant:
         -------
         callable
             Takes one more sample of the same signals now (e.g. at the end of a run, which the
-            periodic samples never reach).
+            periodic samples never reach). If the FMU asks to end the simulation on its way to now,
+            the sample is taken at the instant it stopped (its last values) and
+            :class:`~cosim.errors.PlantTerminated` is raised.
         """
         self.sim.timebase.check_ticks(period, name="period", minimum=1)
-        mapping = dict(variables) if isinstance(variables, Mapping) else {
-            v: f"{self.name}.{v}" for v in variables}
-        names: list[str] = []
+        mapping = dict(variables) if isinstance(variables, Mapping) else trace_names(
+            list(variables), self.name, order=list(self.fmu.variables))
+        sinks: list[Callable[[int, Any], None]] = []
+        blocks: list[Callable[[Any, Any], None]] = []  # trace.extend of each signal: for samples taken in blocks
         arrays = False
         for variable, trace_name in mapping.items():
             var = self.fmu.variable(variable)
+            arrays = arrays or bool(var.shape)
             if not var.kind.is_numeric:
                 raise ConfigurationError(f"{self.name}.{variable} is a {var.type} variable: the trace records "
                                          "numbers and Booleans only (read it with read())")
             unit = (units or {}).get(variable, var.unit)
             elements = [trace_name + "".join(f".{i}" for i in index) for index in np.ndindex(var.shape)]
-            arrays = arrays or bool(var.shape)
             for name in elements:
                 self.sim.trace.declare(name, "real", unit=unit, description=f"{self.name} {variable}")
-            names += elements
+            recorders = [self.sim.trace.recorder(name) for name in elements]
+            sinks.append(partial(_record_elements, recorders) if var.shape else recorders[0])
+            blocks.append(partial(self.sim.trace.extend, elements[0]))
         t0 = self.sim.now if start is None else start
 
         self.sim.timebase.check_ticks(t0, name="start", minimum=self.sim.now)
-        read_values = self.fmu.reader(list(mapping))
-        read = (lambda: [x for value in read_values() for x in np.ravel(value).tolist()]) if arrays else read_values
-        record = self.sim.trace.record
+        fill = self.fmu.sampler(list(mapping), sinks)  # numbers and bools go to the trace as they come
+        # in a row of samples without other events between them: read into blocks, handed to the trace
+        # when the row ends (before anything else can look at the trace)
+        block = self.fmu.block_sampler(list(mapping), blocks)
         sim, env, fmu = self.sim, self.sim.env, self.fmu
+        peek, count_step, advance_to, step = env.peek, env.count_step, self._advance_to, self._step
 
         last = [-1]  # the tick of the latest sample
 
         def take(t: int) -> None:
             if last[0] == t:
                 return  # sampled at this tick already (an input change or an event asked first)
-            for trace_name, value in zip(names, read(), strict=True):
-                record(trace_name, t, float(value))
+            if block is not None and block.count:
+                block.flush()
+            fill(t)
             last[0] = t
 
+        def take_in_row(t: int) -> None:
+            if last[0] == t:
+                return
+            block.take(t)  # type: ignore[union-attr]
+            last[0] = t
+
+        in_row = take_in_row if block is not None else take
+        flush = block.flush if block is not None else (lambda: None)
+
         def sample_now() -> None:
-            self.advance()
+            try:
+                self.advance()
+            except PlantTerminated:
+                take(fmu.t)  # the FMU asked to end the simulation on the way: its values at that instant
+                raise
             take(fmu.t if fmu.terminated is not None else sim.now)  # a terminated plant: its last instant
+
+        if not arrays and sampleschedule.capacity(self, list(mapping)):  # samples inside the plant's own steps
+            sampleschedule.ScheduledSamples(self, list(mapping), blocks, take, t0=t0, period=period)
+            if at_events:
+                self._samplers.append(take)
+            return sample_now
 
         def sample() -> object:
             # The hot loop of sampled runs. While nothing else is due before the next sample (no
@@ -324,17 +383,26 @@ class Plant:
                     if fmu.t != t:
                         self.advance()
                     while True:
-                        take(t)
+                        in_row(t)
                         k += 1
                         t = t0 + k * period
-                        if env.look_aheads or self._watched or sim.due_by(t):
+                        if env.look_aheads or self._watched or peek() <= t:  # sim.due_by(t)
                             break
-                        env.count_step(t)  # progress on long sampled runs, which run here without events
-                        self._advance_to(t)
+                        count_step(t)  # progress on long sampled runs, which run here without events
+                        if self._before_step or self._after_step:
+                            advance_to(t)
+                        else:  # _advance_to without hooks, inline
+                            reached = step(t)
+                            self.steps += 1
+                            if reached < t:
+                                self._resume(t, reached)
                 except PlantTerminated as ended:
+                    flush()
                     if ended.t == t:
                         take(t)
                     raise
+                finally:
+                    flush()
 
         self.sim.process(sample())  # type: ignore[arg-type]
         if at_events:
@@ -372,6 +440,8 @@ class Plant:
             self.sim.call_at(max(ended.t, self.sim.now), Priority.PLANT_EVENT, partial(_raise, ended))
             return
         self.steps += 1
+        for hook in self._after_step:
+            hook(reached)
         self._pending = {v: _number(self.fmu.get(v)) for v in self._watched}
         if any(self._pending[v] != s.value for v, s in self._watched.items()):
             self.sim.call_at(reached, Priority.PLANT_EVENT, self._publish_pending)
@@ -398,3 +468,9 @@ def _number(value: Value) -> float:
 
 def _raise(error: Exception) -> None:
     raise error
+
+
+def _record_elements(recorders: list[Callable[[int, float], None]], t: int, value: Value) -> None:
+    """Record an array output's elements, one signal each (row-major)."""
+    for record, x in zip(recorders, np.ravel(value).tolist(), strict=True):
+        record(t, x)

@@ -82,19 +82,51 @@ def test_samples_land_on_k_times_period_and_at_every_input_change() -> None:
     t, power = sim.trace.edges("laser.power")
     assert t.tolist() == sorted([k * 250 * US for k in range(40)] + [300 * US, 2_100 * US, 3_050 * US])
     assert power[0] == 0.0 and power.max() > 10.0
-    assert steps == 39 + 3 + 1  # a step per sample after 0 and per gate change off the grid, one for the read
+    # the Laser takes the samples inside its own steps: a step per gate change (4), one when the run stops
+    # at 10 ms (to 9.75 ms, the last sample before it), one for the read; not one per sample
+    assert steps == 4 + 1 + 1
+
+
+@pytest.mark.parametrize("sample_ns", [100 * US, 250 * US, MS])
+def test_samples_inside_the_plants_steps_are_bit_identical_to_a_step_per_sample(
+        sample_ns: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The Laser stops inside a step at each sample instant as a doStep there would (the same float operations):
+    power and energy equal those of the ordinary way, a doStep per sample, to the last bit."""
+    _, inside, batched = laser_run(sample_ns=sample_ns)
+    from cosim import sampleschedule
+
+    monkeypatch.setattr(sampleschedule, "capacity", lambda *args: 0)
+    _, each, ordinary = laser_run(sample_ns=sample_ns)
+    for name in ("laser.power", "laser.energy"):
+        for got, expected in zip(batched.trace.edges(name), ordinary.trace.edges(name), strict=True):
+            assert got.tobytes() == expected.tobytes(), name
+    assert inside < each
+
+
+def test_forty_thousand_samples_cost_one_step_in_sixty_four() -> None:
+    """The engraver's case: the laser recorded every 100 us for 4 s, nothing else stepping it: 40,000 samples,
+    the Laser stepped every 64th sample (its sample_schedule holds 64), 625 steps, not 40,000."""
+    with Simulation() as sim:
+        laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "gate": True, "pwm_period": 1000,
+                                                                    "pwm_on": 400})
+        laser.record(["power", "energy"], period=100 * US)
+        sim.run(until=4_000 * MS)
+        t, _ = sim.trace.edges("laser.power")
+        assert t.tolist() == [k * 100 * US for k in range(40_000)]
+        assert laser.steps == 625
 
 
 def test_a_gate_change_is_sampled_at_its_tick_without_a_step_of_its_own() -> None:
     """Sampled every 1 ms: the laser power has a sample at each gate change (300 us: still 0 W; 2.1 ms:
     the highest so far), and the FMU steps exactly as often as with no samples at the changes (4 gate changes,
-    9 samples after 0, the final read)."""
+    the samples up to 10 ms delivered when the run stops, the final read: the grid's samples ride inside
+    those steps)."""
     _, steps, sim = laser_run(sample_ns=MS)
     t, power = sim.trace.edges("laser.power")
     assert t.tolist() == sorted([k * MS for k in range(10)] + [300 * US, 2_100 * US, 3_050 * US, 7_500 * US])
     at = dict(zip(t.tolist(), power.tolist(), strict=True))
     assert at[300 * US] == 0.0 and at[2_100 * US] == max(v for k, v in at.items() if k <= 2_100 * US) > 0.0
-    assert steps == 4 + 9 + 1
+    assert steps == 4 + 1 + 1
 
 
 def test_inputs_set_on_a_hot_path_add_no_samples_and_a_plant_event_does() -> None:
@@ -176,13 +208,14 @@ def test_setter_refused_value_names_variable_value_and_range(fmi_version: int) -
 
 
 def test_before_step_hooks_see_every_step_and_its_target_before_it_is_taken() -> None:
-    """Samples every 1 ms (the sample loop) and a read at 1.5 ms (an output needed): each step to t
-    is announced as t while the FMU is still at the previous instant."""
+    """Samples every 1 ms (the sample loop: pwm_periods is an output the Laser does not sample inside its steps)
+    and a read at 1.5 ms (an output needed): each step to t is announced as t while the FMU is still at the
+    previous instant."""
     with Simulation() as sim:
         laser = Plant.load(sim, "Laser", name="laser", parameters={"enable": True, "pwm_period": 1000, "pwm_on": 400})
         seen: list[tuple[int, int]] = []
         laser.before_step(lambda t: seen.append((t, laser.fmu.t)))
-        laser.record(["power"], period=MS)
+        laser.record(["power", "pwm_periods"], period=MS)
         sim.call_at(1_500 * US, 40, lambda: laser.read("energy"))
         sim.run(until=3 * MS + 1)
     assert seen == [(MS, 0), (1_500 * US, MS), (2 * MS, 1_500 * US), (3 * MS, 2 * MS)]

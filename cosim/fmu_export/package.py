@@ -45,7 +45,7 @@ BINARY = "cosim_machine"
 #: A fixed namespace for the instantiation tokens (uuid5 of the FMU's content).
 TOKEN_NAMESPACE = uuid.UUID("0b5e6c1e-2c47-4f3e-9a55-6d0c5e3a1f23")
 #: The machine file's keys that name files, copied into the FMU (relative to the machine file).
-FILE_KEYS = ("program[].file", "plant.NAME.fmu")
+FILE_KEYS = ("program[].file", "plant.NAME.fmu", "plant.NAME.input")
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,8 @@ class Exported:
         Its variables (value references 1, 2, ... in this order, outputs first).
     step_s, stop_s : float
         Default communication step and stop time [s].
+    wheels : tuple of str
+        The wheels a portable FMU carries (file names); empty for a linked one.
     """
 
     path: Path
@@ -67,10 +69,11 @@ class Exported:
     inputs: tuple[Port, ...]
     step_s: float
     stop_s: float
+    wheels: tuple[str, ...] = ()
 
 
 def export_fmu(machine: str | Path, out: str | Path, *, fmi_version: int = 3,
-               overrides: Mapping[str, Any] | None = None) -> Exported:
+               overrides: Mapping[str, Any] | None = None, portable: bool = True) -> Exported:
     """Export a machine file as a co-simulation FMU.
 
     Parameters
@@ -83,6 +86,11 @@ def export_fmu(machine: str | Path, out: str | Path, *, fmi_version: int = 3,
         FMI 3.0 (early return and event mode at event-bearing outputs) or FMI 2.0.
     overrides : mapping, optional
         ``--set`` values, as for ``cosim run``.
+    portable : bool
+        Carry cosim and the distributions the machine imports as wheels, installed on first
+        instantiation into a per-user cache (:mod:`cosim.fmu_export.bootstrap`): the FMU runs on
+        any computer of this platform with a CPython of this minor version (default). False: record
+        this environment's site folders instead (a small FMU that runs only where they exist).
 
     Raises
     ------
@@ -122,10 +130,14 @@ def export_fmu(machine: str | Path, out: str | Path, *, fmi_version: int = 3,
         (own / "machine").mkdir(parents=True)
         (root / "modelDescription.xml").write_text(md)
         (own / "machine.json").write_text(json.dumps(description, indent=1, sort_keys=True))
-        (own / "runtime.txt").write_text(runtime_text())
         for target, source in files.items():
             (own / "machine" / target).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(source, own / "machine" / target)
+        wheels: tuple[str, ...] = ()
+        digest = ""
+        if portable:
+            wheels, digest = _carry(root / "resources", own, fmi_version=fmi_version, step_s=step_s)
+        (own / "runtime.txt").write_text(runtime_text(digest=digest))
         platform = _platform_folder(fmi_version)
         (root / "binaries" / platform).mkdir(parents=True)
         shutil.copy2(library, root / "binaries" / platform / f"{identifier}.so")
@@ -133,7 +145,27 @@ def export_fmu(machine: str | Path, out: str | Path, *, fmi_version: int = 3,
         (root / "documentation" / "index.html").write_text(_documentation(loaded.name, text, outputs, inputs))
         out.parent.mkdir(parents=True, exist_ok=True)
         _zip(root, out)
-    return Exported(path=out, outputs=outputs, inputs=inputs, step_s=step_s, stop_s=stop_s)
+    return Exported(path=out, outputs=outputs, inputs=inputs, step_s=step_s, stop_s=stop_s, wheels=wheels)
+
+
+def _carry(resources: Path, own: Path, *, fmi_version: int, step_s: float) -> tuple[tuple[str, ...], str]:
+    """Put the wheels the machine needs and the bootstrap into ``own``; their names and the FMU's digest."""
+    import hashlib
+
+    from cosim.fmu_export import bootstrap
+    from cosim.fmu_export.wheels import imported_distributions, wheels_for
+    from cosim.fmubuild import MODELS_DIR
+
+    names = imported_distributions(resources, fmi_version=fmi_version, step_s=step_s)
+    folder = own / "wheels"
+    folder.mkdir()
+    digest = hashlib.sha256((own / "machine.json").read_bytes())
+    for wheel in wheels_for(names, MODELS_DIR / "export" / "wheels"):
+        shutil.copyfile(wheel, folder / wheel.name)
+        digest.update(wheel.name.encode() + hashlib.sha256(wheel.read_bytes()).digest())
+    shutil.copyfile(bootstrap.__file__, own / "bootstrap.py")
+    digest.update((own / "bootstrap.py").read_bytes())
+    return tuple(sorted(p.name for p in folder.iterdir())), digest.hexdigest()
 
 
 # -- the machine document inside the FMU ------------------------------------------------------------
@@ -149,10 +181,24 @@ def _relocated(values: dict[str, Any], *, base: Path, plants: str) -> tuple[dict
             program["file"] = target
     if plants == "inside":
         for name, plant in document.get("plant", {}).items():
-            if isinstance(plant, dict) and isinstance(plant.get("fmu"), str):
+            if not isinstance(plant, dict):
+                continue
+            if isinstance(plant.get("model"), str):  # a bundled plant: its built FMU and preset go in as they are
+                from cosim.fmubuild import ensure_fmu
+
+                plant["fmu"] = str(ensure_fmu(plant.pop("model"), int(plant.get("fmi", 3))))
+                if isinstance(plant.get("preset"), str):
+                    from cosim.presets import load_preset
+
+                    plant["parameters"] = {**load_preset(plant.pop("preset")), **plant.get("parameters", {})}
+            if isinstance(plant.get("fmu"), str):
                 target = f"fmus/{name}.fmu"
                 files[target] = (base / plant["fmu"]).resolve()
                 plant["fmu"] = target
+            if isinstance(plant.get("input"), str):
+                target = f"inputs/{name}_{Path(plant['input']).name}"
+                files[target] = (base / plant["input"]).resolve()
+                plant["input"] = target
     return document, files
 
 
@@ -188,17 +234,25 @@ def site_folders() -> list[str]:
     return list(dict.fromkeys(f for f in folders if Path(f).is_dir()))
 
 
-def runtime_text() -> str:
-    """``resources/cosim/runtime.txt``: read by the C entry point (key=value lines)."""
+def runtime_text(*, digest: str = "") -> str:
+    """``resources/cosim/runtime.txt``: read by the C entry point (key=value lines).
+
+    A portable FMU (``digest`` given) carries its packages (``wheels=``, ``bootstrap=``) and names
+    no folder of this environment; the Python it was exported with (``libpython``, ``home``) is the
+    first place its entry point looks, then ``python3.X`` on the PATH and the system's libraries.
+    A linked one names this environment's site folders (``path=``).
+    """
     version = f"{sys.version_info.major}.{sys.version_info.minor}"
     lines = ["# The Python runtime this FMU needs (written by cosim export-fmu; read by its C entry point).",
              f"python_version={version}",
              f"python={getattr(sys, '_base_executable', sys.executable)}",
              f"libpython={libpython()}",
-             f"home={sys.base_prefix}",
-             *[f"path={folder}" for folder in site_folders()],
-             "module=cosim.fmu_export.runtime",
-             f"cosim_version={__version__}"]
+             f"home={sys.base_prefix}"]
+    if digest:
+        lines += ["wheels=wheels", "bootstrap=bootstrap.py", f"digest={digest}"]
+    else:
+        lines += [f"path={folder}" for folder in site_folders()]
+    lines += ["module=cosim.fmu_export.runtime", f"cosim_version={__version__}"]
     return "\n".join(lines) + "\n"
 
 
@@ -300,8 +354,11 @@ def _documentation(name: str, text: str, outputs: tuple[Port, ...], inputs: tupl
                    f"<td>{'yes' if p.event else ''}</td></tr>"
                    for kind, ports in (("output", outputs), ("input", inputs)) for p in ports)
     return (f"<html><body><h1>{escape(name)}</h1><p>{escape(text)}: a machine exported by cosim "
-            f"{__version__} (cosim export-fmu).</p><p>It runs cosim in Python: it needs the Python runtime and the "
-            "environment named in resources/cosim/runtime.txt, and says in its log what is missing.</p>"
+            f"{__version__} (cosim export-fmu).</p><p>It runs cosim in Python: it needs a CPython of the minor version "
+            "named in resources/cosim/runtime.txt (a shared libpython for a C importer). A portable FMU carries "
+            "cosim and its packages in resources/cosim/wheels and installs them on first use into a per-user cache "
+            "(COSIM_FMU_CACHE, else ~/.cache/cosim/fmu); a linked one needs the environment runtime.txt names. It "
+            "says in its log what is missing.</p>"
             "<table><tr><th>variable</th><th>causality</th><th>type</th><th>source</th><th>event</th></tr>"
             f"{rows}</table></body></html>\n")
 
@@ -312,7 +369,7 @@ def _zip(folder: Path, target: Path) -> None:
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED) as zf:
         for path in sorted(p for p in folder.rglob("*") if p.is_file()):
             info = zipfile.ZipInfo(path.relative_to(folder).as_posix(), date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
+            info.compress_type = zipfile.ZIP_STORED if path.suffix == ".whl" else zipfile.ZIP_DEFLATED  # zipped already
             info.external_attr = (0o755 if path.suffix == ".so" else 0o644) << 16
             zf.writestr(info, path.read_bytes())
     os.replace(partial, target)

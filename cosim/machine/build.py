@@ -133,6 +133,12 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
                 couple_switches(plant, port, variables=mapping)
             else:
                 COUPLINGS[kind](port, plant, variables=mapping)  # type: ignore[misc]
+    inputs = table.text("input", None)  # an input table (cosim.fmuinput): the plant's inputs over time
+    if inputs is not None:
+        from cosim.fmuinput import drive_from_table, read_input_table
+
+        with table.at("input"):
+            drive_from_table(plant, read_input_table(base / inputs, plant.fmu.variables, timebase=run.sim.timebase))
     record = table.table("record")
     if record.data:
         names = record.raw("variables")

@@ -89,15 +89,14 @@ void model_outputs(ModelInstance *m) {
     m->v.lasing = lases(m);
 }
 
-Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
+/* Advance from the instance's time to t_end (the body of one doStep). */
+static void step_to(ModelInstance *m, double t_end) {
     const double ua = clock_ticks(m, m->time), ub = clock_ticks(m, t_end);
     const double period = (double)m->v.pwm_period, on = (double)m->v.pwm_on, phase = (double)m->v.pwm_phase;
     const double peak = lases(m) ? m->v.peak_power : 0.0;
     ModelState *s = &m->s;
-    *event = 0;
-    *t_reached = t_end;
     if (ub <= ua) {
-        return ST_OK;
+        return;
     }
     if (level(m, ua, 0) && !s->mod_prev) {
         s->periods++; /* the output rises at the start of this step */
@@ -129,5 +128,33 @@ Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event)
         }
     }
     s->mod_prev = level(m, ub, 1);
+}
+
+/* One doStep to t_end, stopping at the instants of sample_schedule inside it (FMI 3.0): at each, as if a
+ * doStep ended there (end of the step before it: row[0]) and the next began (row[1]), the outputs are
+ * computed and power and energy kept in the sample arrays. */
+Status model_step(ModelInstance *m, double t_end, double *t_reached, int *event) {
+    int32_t taken = 0;
+#ifdef N_SAMPLE_SCHEDULE
+    int k;
+    for (k = 0; k < N_POWER_SAMPLES; k++) {
+        const double end = m->v.sample_schedule[2 * k], next = m->v.sample_schedule[2 * k + 1];
+        if (!(next > m->time) || !(end < t_end) || !(next < t_end)) {
+            break; /* the list ends at the first row not after the instance's time */
+        }
+        step_to(m, end);
+        m->time = end;
+        model_outputs(m);
+        m->v.power_samples[taken] = m->v.power;
+        m->v.energy_samples[taken] = m->v.energy;
+        taken++;
+        m->time = next;
+    }
+    m->v.samples_taken[0] = taken;
+#endif
+    (void)taken;
+    *event = 0;
+    *t_reached = t_end;
+    step_to(m, t_end);
     return ST_OK;
 }

@@ -3,6 +3,7 @@
 #include "machine.h"
 
 #include <dlfcn.h>
+#include <limits.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -23,7 +24,10 @@ typedef struct {
     char libpython[LINE];    /* the shared libpython (empty: the Python had none) */
     char home[LINE];         /* PYTHONHOME: sys.base_prefix */
     char paths[MAX_PATHS][LINE];
-    int n_paths;             /* site folders of the environment (cosim and its dependencies) */
+    int n_paths;             /* site folders of the environment (cosim and its dependencies): a linked FMU */
+    char wheels[256];        /* a portable FMU: its wheels' folder in resources/cosim ("wheels") */
+    char bootstrap[256];     /* ... the script that installs them (resources/cosim/bootstrap.py) */
+    char digest[128];        /* ... and the FMU's digest, which names its folder in the per-user cache */
     char module[256];        /* cosim.fmu_export.runtime */
 } Runtime;
 
@@ -48,10 +52,12 @@ typedef struct {
     void (*DecRef)(void *);
     void *(*Err_Occurred)(void);
     void (*Err_Fetch)(void **, void **, void **);
+    void *(*Dict_GetItemString)(void *, const char *);
 } PyApi;
 
 static PyApi py;
 static int py_ready = 0;
+static int py_own = 0; /* the interpreter was started here (a C importer), not the importer's own */
 static pthread_mutex_t py_lock = PTHREAD_MUTEX_INITIALIZER;
 
 /* -- messages ----------------------------------------------------------------------------------- */
@@ -131,8 +137,17 @@ static int is_dir(const char *path) {
     return path[0] != '\0' && stat(path, &st) == 0 && S_ISDIR(st.st_mode);
 }
 
+/* text into target (size bytes), cut if longer. */
 static void copy(char *target, size_t size, const char *text) {
-    snprintf(target, size, "%s", text);
+    size_t n = strlen(text);
+    if (size == 0) {
+        return;
+    }
+    if (n >= size) {
+        n = size - 1;
+    }
+    memcpy(target, text, n);
+    target[n] = '\0';
 }
 
 static int read_runtime(const Machine *m, const char *resources, Runtime *rt) {
@@ -169,6 +184,12 @@ static int read_runtime(const Machine *m, const char *resources, Runtime *rt) {
             copy(rt->module, sizeof rt->module, value);
         } else if (strcmp(line, "path") == 0 && rt->n_paths < MAX_PATHS) {
             copy(rt->paths[rt->n_paths++], LINE, value);
+        } else if (strcmp(line, "wheels") == 0) {
+            copy(rt->wheels, sizeof rt->wheels, value);
+        } else if (strcmp(line, "bootstrap") == 0) {
+            copy(rt->bootstrap, sizeof rt->bootstrap, value);
+        } else if (strcmp(line, "digest") == 0) {
+            copy(rt->digest, sizeof rt->digest, value);
         }
     }
     fclose(file);
@@ -209,6 +230,7 @@ static const char *bind(void *handle) {
     BIND(handle, DecRef, "Py_DecRef");
     BIND(handle, Err_Occurred, "PyErr_Occurred");
     BIND(handle, Err_Fetch, "PyErr_Fetch");
+    BIND(handle, Dict_GetItemString, "PyDict_GetItemString");
     *(void **)(&py.SetPythonHome) = dlsym(handle, "Py_SetPythonHome"); /* optional: deprecated since 3.11 */
     return missing;
 }
@@ -219,11 +241,139 @@ static int same_version(const char *version, const char *wanted) {
     return strncmp(version, wanted, n) == 0 && version[n] == '.';
 }
 
+/* -- finding a Python ---------------------------------------------------------------------------- */
+/* A Python with a shared libpython of the FMU's minor version, in this order: $COSIM_FMU_LIBPYTHON; the
+ * one the FMU was exported with (runtime.txt), if this computer has it; python<X.Y> on the PATH (its
+ * prefix's lib folder); the system's libpython<X.Y>.so.1.0 (the dynamic loader's search path). Its home
+ * (PYTHONHOME) is the prefix whose lib/python<X.Y>/os.py exists: recorded, or found from the library's
+ * folder; "" leaves it to Python. Each place looked at is added to `tried`, for the message. */
+typedef struct {
+    char library[LINE];
+    char home[LINE];
+    char tried[8 * LINE];
+} Found;
+
+static void note_tried(Found *f, const char *what) {
+    size_t n = strlen(f->tried);
+    if (n > 0) {
+        copy(f->tried + n, sizeof f->tried - n, "; ");
+        n = strlen(f->tried);
+    }
+    copy(f->tried + n, sizeof f->tried - n, what);
+}
+
+static void parent(char *path) {
+    char *slash = strrchr(path, '/');
+    if (slash != NULL && slash != path) {
+        *slash = '\0';
+    } else if (slash == path) {
+        path[1] = '\0';
+    }
+}
+
+static int is_home(const char *prefix, const char *version) {
+    char stdlib[LINE + 64];
+    snprintf(stdlib, sizeof stdlib, "%s/lib/python%s/os.py", prefix, version);
+    return is_file(stdlib);
+}
+
+/* The home of a libpython at `library`: its folder's parent, or that one's parent (lib/<multiarch>/). */
+static void home_of(const char *library, const char *version, char *home, size_t size) {
+    char prefix[LINE];
+    int i;
+    home[0] = '\0';
+    copy(prefix, sizeof prefix, library);
+    parent(prefix); /* .../lib */
+    for (i = 0; i < 2; i++) {
+        parent(prefix);
+        if (is_home(prefix, version)) {
+            copy(home, size, prefix);
+            return;
+        }
+    }
+}
+
+static int found_library(Found *f, const char *library, const char *version) {
+    copy(f->library, sizeof f->library, library);
+    home_of(library, version, f->home, sizeof f->home);
+    return 1;
+}
+
+static int find_python(const Runtime *rt, Found *f) {
+    const char *own = getenv("COSIM_FMU_LIBPYTHON");
+    const char *path = getenv("PATH");
+    char name[64], soname[64], what[4 * LINE];
+    memset(f, 0, sizeof *f);
+    snprintf(name, sizeof name, "python%s", rt->python_version);
+    snprintf(soname, sizeof soname, "libpython%s.so.1.0", rt->python_version);
+    if (own != NULL && own[0] != '\0') {
+        if (is_file(own)) {
+            return found_library(f, own, rt->python_version);
+        }
+        snprintf(what, sizeof what, "COSIM_FMU_LIBPYTHON=%s (no such file)", own);
+        note_tried(f, what);
+    }
+    if (rt->libpython[0] != '\0') {
+        if (is_file(rt->libpython)) {
+            copy(f->library, sizeof f->library, rt->libpython);
+            if (is_home(rt->home, rt->python_version)) {
+                copy(f->home, sizeof f->home, rt->home);
+            } else {
+                home_of(rt->libpython, rt->python_version, f->home, sizeof f->home);
+            }
+            return 1;
+        }
+        snprintf(what, sizeof what, "%s (recorded at export: not on this computer)", rt->libpython);
+        note_tried(f, what);
+    }
+    if (path != NULL) {
+        char folders[4 * LINE];
+        char *folder, *save = NULL;
+        copy(folders, sizeof folders, path);
+        for (folder = strtok_r(folders, ":", &save); folder != NULL; folder = strtok_r(NULL, ":", &save)) {
+            char executable[LINE + 64], real[PATH_MAX], library[LINE + 128];
+            const char *suffixes[] = {"lib/%s", "lib/libpython%s.so"};
+            size_t k;
+            snprintf(executable, sizeof executable, "%s/%s", folder, name);
+            if (!is_file(executable) || realpath(executable, real) == NULL) {
+                continue;
+            }
+            parent(real); /* .../bin */
+            parent(real); /* the prefix */
+            for (k = 0; k < sizeof suffixes / sizeof suffixes[0]; k++) {
+                char relative[128];
+                snprintf(relative, sizeof relative, suffixes[k], k == 0 ? soname : rt->python_version);
+                snprintf(library, sizeof library, "%s/%s", real, relative);
+                if (is_file(library)) {
+                    return found_library(f, library, rt->python_version);
+                }
+            }
+            snprintf(what, sizeof what, "%s (no shared libpython beside it in %s/lib)", executable, real);
+            note_tried(f, what);
+            break;
+        }
+    }
+    {
+        void *handle = dlopen(soname, RTLD_NOW | RTLD_GLOBAL);
+        if (handle != NULL) {
+            Dl_info info;
+            void *symbol = dlsym(handle, "Py_IsInitialized");
+            if (symbol != NULL && dladdr(symbol, &info) != 0 && info.dli_fname != NULL) {
+                return found_library(f, info.dli_fname, rt->python_version);
+            }
+            return found_library(f, soname, rt->python_version);
+        }
+        snprintf(what, sizeof what, "%s (not on the library search path)", soname);
+        note_tried(f, what);
+    }
+    return 0;
+}
+
 static int load_python(const Machine *m, const Runtime *rt) {
     int (*initialized)(void) = NULL;
     void *handle;
     const char *missing;
-    char stdlib[LINE + 64];
+    Found found;
     if (py_ready) {
         return 1;
     }
@@ -245,51 +395,55 @@ static int load_python(const Machine *m, const Runtime *rt) {
         py_ready = 1;
         return 1;
     }
-    if (rt->libpython[0] == '\0') {
-        machine_log(m, MS_ERROR, "logStatusError",
-                    "the Python this FMU was exported with (%s) has no shared libpython, so the FMU runs only "
-                    "inside a Python %s process (fmpy); export it from a Python built with --enable-shared",
-                    rt->python, rt->python_version);
+    if (!find_python(rt, &found)) {
+        if (rt->wheels[0] == '\0' && rt->libpython[0] == '\0') {
+            machine_log(m, MS_ERROR, "logStatusError",
+                        "the Python this FMU was exported with (%s) has no shared libpython, so the FMU runs only "
+                        "inside a Python %s process (fmpy); export it from a Python built with --enable-shared",
+                        rt->python, rt->python_version);
+        } else {
+            machine_log(m, MS_ERROR, "logStatusError",
+                        "the Python runtime this FMU needs is missing: no CPython %s with a shared libpython was "
+                        "found (the FMU was exported with Python %s, %s); looked at: %s. Install CPython %s with "
+                        "its shared library (Debian, Ubuntu: the package libpython%s; pyenv: "
+                        "PYTHON_CONFIGURE_OPTS=--enable-shared), or set COSIM_FMU_LIBPYTHON to its libpython%s.so.1.0",
+                        rt->python_version, rt->python_version, rt->python, found.tried, rt->python_version,
+                        rt->python_version, rt->python_version);
+        }
         return 0;
     }
-    if (!is_file(rt->libpython)) {
+    if (found.home[0] == '\0') { /* Python would abort the importer at start-up without its standard library */
         machine_log(m, MS_ERROR, "logStatusError",
-                    "the Python runtime this FMU needs is missing: %s does not exist (the FMU was exported with "
-                    "Python %s, %s); install that Python, or export the machine again on this computer "
-                    "(cosim export-fmu)",
-                    rt->libpython, rt->python_version, rt->python);
+                    "the standard library of Python %s is missing: no lib/python%s/os.py above %s (the Python "
+                    "runtime found for this FMU); install CPython %s completely, or set COSIM_FMU_LIBPYTHON to "
+                    "another one",
+                    rt->python_version, rt->python_version, found.library, rt->python_version);
         return 0;
     }
-    snprintf(stdlib, sizeof stdlib, "%s/lib/python%s/os.py", rt->home, rt->python_version);
-    if (!is_file(stdlib)) {
-        machine_log(m, MS_ERROR, "logStatusError",
-                    "the standard library of Python %s is missing: %s does not exist (PYTHONHOME %s, recorded "
-                    "at export)",
-                    rt->python_version, stdlib, rt->home);
-        return 0;
-    }
-    handle = dlopen(rt->libpython, RTLD_NOW | RTLD_GLOBAL);
+    handle = dlopen(found.library, RTLD_NOW | RTLD_GLOBAL);
     if (handle == NULL) {
-        machine_log(m, MS_ERROR, "logStatusError", "cannot load the Python runtime %s: %s", rt->libpython,
+        machine_log(m, MS_ERROR, "logStatusError", "cannot load the Python runtime %s: %s", found.library,
                     dlerror());
         return 0;
     }
     missing = bind(handle);
     if (missing != NULL) {
-        machine_log(m, MS_ERROR, "logStatusError", "%s has no %s", rt->libpython, missing);
+        machine_log(m, MS_ERROR, "logStatusError", "%s has no %s", found.library, missing);
         return 0;
     }
     if (!py.IsInitialized()) {
         if (py.SetPythonHome != NULL) {
-            wchar_t *home = py.DecodeLocale(rt->home, NULL);
+            wchar_t *home = py.DecodeLocale(found.home, NULL);
             if (home != NULL) {
                 py.SetPythonHome(home); /* kept for the life of the interpreter, as Python requires */
             }
         }
         py.InitializeEx(0); /* 0: leave the importer's signal handlers alone */
         py.Eval_SaveThread(); /* release the GIL: every call below takes it with PyGILState_Ensure */
+        py_own = 1;
     }
-    machine_log(m, MS_OK, "logEvents", "loaded Python %.20s from %s", py.GetVersion(), rt->libpython);
+    machine_log(m, MS_OK, "logEvents", "loaded Python %.20s from %s (home %s)", py.GetVersion(), found.library,
+                found.home);
     py_ready = 1;
     return 1;
 }
@@ -336,6 +490,15 @@ static void *call(const Machine *m, void *callable, const char *what, const char
         exception_text(text, sizeof text);
         machine_log(m, MS_ERROR, "logStatusError", "%s failed in Python: %s", what, text);
     }
+    return out;
+}
+
+static void *call_va(const Machine *m, void *callable, const char *what, const char *format, ...) {
+    void *out;
+    va_list args;
+    va_start(args, format);
+    out = call(m, callable, what, format, args);
+    va_end(args);
     return out;
 }
 
@@ -399,6 +562,50 @@ static int add_site_folders(const Machine *m, const Runtime *rt) {
     return ok;
 }
 
+/* A portable FMU: resources/cosim/bootstrap.py installs the wheels it carries (once, into the per-user
+ * cache) and puts them on sys.path. */
+static int install_wheels(const Machine *m, const Runtime *rt, const char *resources) {
+    char script[2 * LINE];
+    void *runpy, *globals, *prepare, *args, *folder;
+    int ok = 0;
+    snprintf(script, sizeof script, "%s/cosim/%s", resources, rt->bootstrap[0] ? rt->bootstrap : "bootstrap.py");
+    if (!is_file(script)) {
+        machine_log(m, MS_ERROR, "logStatusError",
+                    "%s is missing: the FMU's resources are incomplete (export the machine again)", script);
+        return 0;
+    }
+    runpy = py.Import_ImportModule("runpy");
+    if (runpy == NULL) {
+        char text[LINE];
+        exception_text(text, sizeof text);
+        machine_log(m, MS_ERROR, "logStatusError", "cannot import runpy: %s", text);
+        return 0;
+    }
+    globals = call_attr(m, runpy, "run_path", "(s)", script);
+    py.DecRef(runpy);
+    if (globals == NULL) {
+        return 0;
+    }
+    prepare = py.Dict_GetItemString(globals, "prepare"); /* borrowed */
+    if (prepare == NULL) {
+        machine_log(m, MS_ERROR, "logStatusError", "%s has no prepare() (export the machine again)", script);
+    } else {
+        args = call_va(m, prepare, "installing the FMU's Python packages", "(ssi)", resources, rt->digest, py_own);
+        if (args != NULL) {
+            folder = py.Object_Str(args);
+            machine_log(m, MS_OK, "logEvents", "cosim and its packages from %s",
+                        folder != NULL && py.Unicode_AsUTF8(folder) != NULL ? py.Unicode_AsUTF8(folder) : "?");
+            if (folder != NULL) {
+                py.DecRef(folder);
+            }
+            py.DecRef(args);
+            ok = 1;
+        }
+    }
+    py.DecRef(globals);
+    return ok;
+}
+
 /* -- instances ---------------------------------------------------------------------------------- */
 static char *duplicate(const char *text) {
     size_t n = strlen(text) + 1;
@@ -447,13 +654,14 @@ Machine *machine_new(int fmi_version, const char *name, const char *token, const
     }
     ok = 0;
     gil = py.GILState_Ensure();
-    if (add_site_folders(m, rt)) {
+    if (rt->wheels[0] != '\0' ? install_wheels(m, rt, resources) : add_site_folders(m, rt)) {
         module = py.Import_ImportModule(rt->module);
         if (module == NULL) {
             char text[LINE];
             exception_text(text, sizeof text);
-            machine_log(m, MS_ERROR, "logStatusError", "cannot import %s from the environment %s: %s", rt->module,
-                        rt->n_paths > 0 ? rt->paths[0] : "(none recorded)", text);
+            machine_log(m, MS_ERROR, "logStatusError", "cannot import %s from %s: %s", rt->module,
+                        rt->wheels[0] != '\0' ? "the FMU's own packages" : rt->n_paths > 0 ? rt->paths[0]
+                                                                               : "(no environment recorded)", text);
         } else {
             slave = call_attr(m, module, "instantiate", "(sssiiiiKK)", resources, m->name, token != NULL ? token : "",
                               fmi_version, event_mode_used, early_return_allowed, logging_on,
