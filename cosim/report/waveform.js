@@ -1,0 +1,433 @@
+/* The waveform of a cosim run page: every row of the run in one Bokeh figure, drawn from the
+ * data the page holds (script#cosim-wave) and the side files it loads when zoomed in.
+ *
+ * Rows are bands of the figure, y in pixels from the top. What each row shows is worked out
+ * here for the visible window only (numbers in ticks of the trace's resolution):
+ *   value rows   the records held until the next one (a step line; a bit also shaded when high;
+ *                an int with named states or a constant row also labelled), from the finest level
+ *                that suits the window;
+ *   pulse trains the pulses when at most `cap` are visible (cosimPulses, the rule of
+ *                cosim.pulses), else the rate (pulses/s, signed by direction);
+ *   violations   a marker per violation in the top band, a dashed line through every row.
+ * The view (window and rows) is kept in the URL: #t=<from ms>,<to ms>&rows=<name>,<name>...
+ */
+(function () {
+  "use strict";
+  const W = {};
+  window.cosimWave = W;
+  const loaded = {}, requested = {};
+  let B = null, D = null, shown = [], custom = false, layout = [], total = 0, scheduled = false;
+  let laneNames = {}, firstDrawn = false, hashTimer = null, current = -1, applyingHash = false;
+
+  function decode(s) {
+    const bin = atob(s), bytes = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+    return new Float64Array(bytes.buffer);
+  }
+  function decodeAll(obj) {
+    const out = {};
+    for (const k in obj) out[k] = decode(obj[k]);
+    return out;
+  }
+  window.cosimData = function (key, arrays) {
+    loaded["waveform/" + key] = decodeAll(arrays);
+    schedule();
+  };
+  function need(file) {
+    if (loaded[file]) return loaded[file];
+    if (!requested[file]) {
+      requested[file] = true;
+      const s = document.createElement("script");
+      s.src = file;
+      document.head.appendChild(s);
+    }
+    return null;
+  }
+
+  // -- time in words ---------------------------------------------------------------------------
+  function unitFor(spanNs) {
+    return spanNs >= 2e9 ? ["s", 1e9] : spanNs >= 2e6 ? ["ms", 1e6] : spanNs >= 2e3 ? ["us", 1e3] : ["ns", 1];
+  }
+  W.timeText = function (ticks, spanTicks) {
+    ensure();
+    const ns = ticks * D.nsPerTick;
+    const [u, f] = unitFor(Math.abs(spanTicks === undefined ? ns : spanTicks * D.nsPerTick));
+    return Number((ns / f).toPrecision(12)).toLocaleString("en", {maximumFractionDigits: 9}) + " " + u;
+  };
+  function msText(ticks) {
+    return String(Number((ticks * D.nsPerTick / 1e6).toFixed(6)));
+  }
+  function valueText(row, v) {
+    if (v === null || v === undefined) return "no record yet";
+    if (Number.isNaN(v)) return "NaN";
+    if (row.states && row.states[v] !== undefined) return row.states[v] + " (" + v + ")";
+    const text = Number.isInteger(v) ? v.toLocaleString("en") : Number(v.toPrecision(6)).toLocaleString("en", {maximumFractionDigits: 6});
+    return row.unit ? text + " " + row.unit : text;
+  }
+
+  // -- layout ------------------------------------------------------------------------------------
+  const HEIGHT = {bit: 26, pulse: 42, int: 40, real: 54};
+  function bandHeight(row) {
+    if (row.quiet || row.constant) return 22;
+    if (row.kind === "int" && row.states) return 30;
+    return HEIGHT[row.kind];
+  }
+  function relayout() {
+    layout = [];
+    let y = 0;
+    const checks = D.checks.filter((c) => c.marks > 0);
+    if (D.marks.length) {
+      layout.push({band: "violations", top: 0, h: 14 + 16 * checks.length, checks: checks});
+      y += layout[0].h;
+    }
+    for (const name of shown) {
+      const row = D.byName[name];
+      const h = bandHeight(row);
+      layout.push({band: "row", row: row, top: y, h: h});
+      y += h;
+    }
+    const folded = D.quiet.filter((n) => shown.indexOf(n) < 0);
+    if (folded.length) {
+      layout.push({band: "quiet", top: y, h: 22, names: folded});
+      y += 22;
+    }
+    total = Math.max(y, 20);
+    const ticks = [], labels = {};
+    for (const lane of layout) {
+      const mid = lane.top + lane.h / 2;
+      ticks.push(mid);
+      labels[mid] = lane.band === "row" ? lane.row.name : lane.band === "violations" ? "violations"
+        : folded.length + " quiet signals";
+    }
+    B.yr.setv({start: total, end: 0});
+    laneNames = labels;
+    B.ticker.ticks = ticks;
+    B.fig.height = total + 70;
+    const bands = {y0: [], y1: [], color: []};
+    layout.forEach((lane, k) => {
+      bands.y0.push(lane.top); bands.y1.push(lane.top + lane.h);
+      bands.color.push(lane.band === "violations" ? "#fdeaea" : lane.row && lane.row.checked ? "#fff6e0"
+        : k % 2 ? "#f4f6f8" : "#ffffff");
+    });
+    B.bands.data = bands;
+  }
+
+  // -- data of a row for a window ----------------------------------------------------------------
+  function lowerBound(a, x) { let lo = 0, hi = a.length; while (lo < hi) { const m = (lo + hi) >> 1; if (a[m] < x) lo = m + 1; else hi = m; } return lo; }
+  function upperBound(a, x) { let lo = 0, hi = a.length; while (lo < hi) { const m = (lo + hi) >> 1; if (a[m] <= x) lo = m + 1; else hi = m; } return lo; }
+
+  function pickLevel(row, span) {  // the coarsest level whose slices are narrower than a pixel or two
+    const want = span / 1500;
+    for (const level of row.detail) if (level.w <= want) return level;
+    return row.detail[row.detail.length - 1];
+  }
+  function blocksIn(level, a, b) { return level.blocks.filter((bl) => bl[1] >= a && bl[0] <= b); }
+  function gather(level, a, b, keys) {  // the loaded blocks of a level in [a, b], or null while loading
+    const parts = [];
+    let missing = false;
+    for (const bl of blocksIn(level, a, b)) {
+      const data = need(bl[2]);
+      if (data === null) missing = true; else parts.push(data);
+    }
+    if (missing) return null;
+    const out = {};
+    for (const k of keys) {
+      const n = parts.reduce((s, p) => s + p[k].length, 0), arr = new Float64Array(n);
+      let o = 0;
+      for (const p of parts) { arr.set(p[k], o); o += p[k].length; }
+      out[k] = arr;
+    }
+    return out;
+  }
+  function valuePoints(row, a, b) {
+    if (!row.detail.length) return {t: row.t, v: row.v};
+    const level = pickLevel(row, b - a);
+    const got = gather(level, a, b, ["t", "v"]);
+    if (got === null || got.t.length === 0) return {t: row.t, v: row.v};
+    // the part after the last block still holds the last value: close with the overview's end
+    return {t: Float64Array.from([...got.t, row.t[row.t.length - 1]]), v: Float64Array.from([...got.v, got.v[got.v.length - 1]])};
+  }
+  function valueAt(row, pts, x) {
+    const i = upperBound(pts.t, x) - 1;
+    return i < 0 ? null : pts.v[i];
+  }
+
+  // -- drawing -----------------------------------------------------------------------------------
+  function schedule() {
+    if (scheduled || B === null) return;
+    scheduled = true;
+    requestAnimationFrame(() => { scheduled = false; draw(); });
+  }
+  function draw() {
+    const a = B.xr.start, b = B.xr.end, span = Math.max(b - a, 1);
+    const px = span / Math.max(B.fig.inner_width || 1200, 100);  // ticks per pixel
+    const lines = {xs: [], ys: [], color: []};
+    const quads = {left: [], right: [], bottom: [], top: [], color: [], alpha: []};
+    const texts = {x: [], y: [], text: [], color: []};
+    const marksY = {t: [], y: [], check: [], when: [], value: [], limit: [], detail: []};
+    for (const lane of layout) {
+      if (lane.band === "violations") {
+        for (const m of D.marks) {
+          const k = lane.checks.findIndex((c) => c.number === m.check);
+          marksY.t.push(m.t); marksY.y.push(lane.top + 10 + 16 * k); marksY.check.push(m.name);
+          marksY.when.push(W.timeText(m.t)); marksY.value.push(m.value); marksY.limit.push(m.limit);
+          marksY.detail.push(m.detail);
+        }
+        lane.checks.forEach((c, k) => {
+          texts.x.push(a + 4 * px); texts.y.push(lane.top + 10 + 16 * k);
+          texts.text.push("check " + c.number + ": " + c.name); texts.color.push("#b01c1c");
+        });
+        continue;
+      }
+      if (lane.band === "quiet") {
+        texts.x.push(a + 4 * px); texts.y.push(lane.top + lane.h / 2);
+        texts.text.push(lane.names.map((n) => n + " = " + valueText(D.byName[n], D.byName[n].value)).join(", "));
+        texts.color.push("#666");
+        continue;
+      }
+      const row = lane.row, top = lane.top + 4, h = lane.h - 8;
+      if (row.kind === "pulse") drawTrain(row, top, h, a, b, px, quads, lines, texts);
+      else drawValue(row, top, h, a, b, px, lines, quads, texts);
+    }
+    B.lines.data = lines;
+    B.quads.data = quads;
+    B.texts.data = texts;
+    B.markPoints.data = marksY;
+    if (!firstDrawn) {
+      firstDrawn = true;
+      requestAnimationFrame(() => requestAnimationFrame(() => { performance.mark("cosim-first-draw"); W.drawn = true; }));
+    }
+  }
+
+  function yOf(row, v, top, h) {
+    if (row.high === row.low) return top + h / 2;
+    return top + (row.high - v) / (row.high - row.low) * h;
+  }
+  function drawValue(row, top, h, a, b, px, lines, quads, texts) {
+    if (row.quiet || row.constant) {
+      const y = top + h / 2;
+      lines.xs.push([Math.max(row.first, 0), row.t[row.t.length - 1]]); lines.ys.push([y, y]); lines.color.push("#555");
+      texts.x.push(Math.max(a, row.first) + 4 * px); texts.y.push(y - 6);
+      texts.text.push("= " + valueText(row, row.value)); texts.color.push("#333");
+      return;
+    }
+    const pts = valuePoints(row, a, b), t = pts.t, v = pts.v;
+    let i0 = Math.max(upperBound(t, a) - 1, 0);
+    const i1 = Math.min(lowerBound(t, b) + 1, t.length);
+    const xs = [], ys = [];
+    for (let i = i0; i < i1; i++) {
+      const y = Number.isNaN(v[i]) ? NaN : yOf(row, v[i], top, h);
+      const next = i + 1 < t.length ? t[i + 1] : t[i];
+      xs.push(t[i], next); ys.push(y, y);
+    }
+    lines.xs.push(xs); lines.ys.push(ys); lines.color.push(row.kind === "bit" ? "#2a9d3f" : "#333333");
+    const labelled = row.states || row.kind === "bit";
+    if (row.kind === "bit" && i1 - i0 < 20000) {
+      for (let i = i0; i < i1 - 1; i++) {
+        if (v[i] > 0) { quads.left.push(t[i]); quads.right.push(t[i + 1]); quads.bottom.push(top + h); quads.top.push(top); quads.color.push("#2a9d3f"); quads.alpha.push(0.18); }
+      }
+    }
+    if (row.states && i1 - i0 < 5000) {  // a named state on each change wide enough to read it
+      for (let i = i0; i < i1 - 1; i++) {
+        const from = Math.max(t[i], a), to = Math.min(t[i + 1], b);
+        const text = row.states[v[i]] !== undefined ? row.states[v[i]] : String(v[i]);
+        if ((to - from) / px > 7 * text.length + 8) {
+          texts.x.push(from + 4 * px); texts.y.push(Math.min(yOf(row, v[i], top, h) + (v[i] === row.high ? 10 : -6), top + h));
+          texts.text.push(text); texts.color.push("#1f4e79");
+        }
+      }
+    }
+    if (!labelled) {  // the value scale
+      texts.x.push(a + 4 * px); texts.y.push(top + 6); texts.text.push(valueText(row, row.high)); texts.color.push("#888");
+      texts.x.push(a + 4 * px); texts.y.push(top + h - 2); texts.text.push(valueText(row, row.low)); texts.color.push("#888");
+    }
+  }
+
+  function trainRates(row, a, b) {  // {left, right, rate} for the window, from the finest suitable level loaded
+    if (!row.detail.length) return {left: row.left, right: row.right, rate: row.rate, exact: true};
+    const levels = row.detail.filter((l) => l.w > 0);
+    let use = null;
+    const want = (b - a) / 1500;
+    for (const level of levels) {
+      const got = gather(level, a, b, ["left", "rate"]);
+      if (got !== null) use = {level: level, data: got};
+      if (level.w <= want) break;
+    }
+    if (use === null) return {left: row.left, right: row.right, rate: row.rate, exact: false};
+    const right = use.data.left.map((x) => x + use.level.w);
+    return {left: use.data.left, right: right, rate: use.data.rate, w: use.level.w};
+  }
+  function drawTrain(row, top, h, a, b, px, quads, lines, texts) {
+    const zero = yOf(row, 0, top, h);
+    let pulses = null;
+    if (row.seg) {
+      pulses = cosimPulses(row.seg, a, b, D.cap);
+    } else if (row.detail.length) {
+      const r = trainRates(row, a, b);
+      let n = 0;
+      const i0 = Math.max(upperBound(r.left, a) - 1, 0), i1 = lowerBound(r.left, b);
+      const perTick = 1 / 1e9 / D.nsPerTick;
+      for (let i = i0; i < i1; i++) n += Math.abs(r.rate[i]) * (r.right[i] - r.left[i]) * perTick;
+      if (n <= D.cap) {
+        const seg = gather(row.detail[row.detail.length - 1], a, b, ["t0", "duration", "count", "dir", "width"]);
+        if (seg !== null) pulses = cosimPulses(seg, a, b, D.cap);
+      }
+    }
+    row.showing = pulses === null ? "rate" : "pulses";
+    if (pulses !== null) {
+      for (let i = 0; i < pulses.t.length; i++) {
+        quads.left.push(pulses.t[i]); quads.right.push(pulses.t[i] + pulses.width[i]);
+        quads.bottom.push(top + h); quads.top.push(top + 2);
+        quads.color.push(pulses.dir[i] === 1 ? D.up : D.down); quads.alpha.push(0.9);
+      }
+      texts.x.push(a + 4 * px); texts.y.push(top + 6); texts.text.push(pulses.t.length + " pulses in view"); texts.color.push("#888");
+      return;
+    }
+    const r = trainRates(row, a, b);
+    const i0 = Math.max(upperBound(r.left, a) - 1, 0), i1 = lowerBound(r.left, b);
+    for (let i = i0; i < i1; i++) {
+      if (r.right[i] < a) continue;
+      quads.left.push(r.left[i]); quads.right.push(r.right[i]);
+      quads.bottom.push(zero); quads.top.push(yOf(row, r.rate[i], top, h));
+      quads.color.push(r.rate[i] >= 0 ? D.up : D.down); quads.alpha.push(0.45);
+    }
+    lines.xs.push([a, b]); lines.ys.push([zero, zero]); lines.color.push("#bbb");
+    texts.x.push(a + 4 * px); texts.y.push(top + 6);
+    texts.text.push(row.pulses ? valueText({unit: "pulses/s"}, row.high) + " (rate)" : "no pulses");
+    texts.color.push("#888");
+  }
+
+  // -- hover readout -----------------------------------------------------------------------------
+  W.laneName = function (tick) {
+    const name = laneNames[tick];
+    return name === undefined ? "" : name.length > 34 ? "\u2026" + name.slice(name.length - 33) : name;
+  };
+  W.hover = function (x, y) {
+    const out = document.getElementById("cosim-readout");
+    if (!out || D === null) return;
+    const lane = layout.find((l) => y >= l.top && y < l.top + l.h);
+    let text = "t = " + W.timeText(x, B.xr.end - B.xr.start);
+    if (lane && lane.band === "row") {
+      const row = lane.row;
+      if (row.kind === "pulse") {
+        text += "   " + row.name + ": " + (row.showing === "pulses" ? "pulses drawn one by one" : "rate drawn") +
+          (row.unit ? " [" + row.unit + "]" : "");
+      } else {
+        const pts = row.quiet || row.constant ? {t: row.t, v: row.v} : valuePoints(row, B.xr.start, B.xr.end);
+        text += "   " + row.name + " = " + valueText(row, valueAt(row, pts, x));
+      }
+      if (row.desc) text += "   (" + row.desc + ")";
+    }
+    out.textContent = text;
+  };
+
+  // -- the view: window, rows, URL ---------------------------------------------------------------
+  function setWindow(a, b) {
+    const lo = 0, hi = D.end;
+    const span = Math.min(Math.max(b - a, 10), hi - lo);
+    a = Math.min(Math.max(a, lo), hi - span);
+    B.xr.setv({start: a, end: a + span});
+  }
+  W.showTicks = function (t) {
+    const half = Math.max(Math.min((B.xr.end - B.xr.start) / 2, D.end / 40), 5);
+    setWindow(t - half, t + half);
+  };
+  W.showNs = function (tNs) { W.showTicks(tNs / D.nsPerTick); };
+  W.whole = function () { setWindow(0, D.end); };
+  W.setRows = function (names) {
+    if (names === null) { shown = D.defaultRows.slice(); custom = false; }
+    else { shown = D.order.filter((n) => names.indexOf(n) >= 0); custom = true; }
+    relayout(); syncBoxes(); schedule(); saveHash();
+  };
+  W.showCheck = function (number) {
+    const c = D.checks.find((k) => k.number === number);
+    if (!c) return;
+    W.setRows(c.rows.length ? c.rows : null);
+    if (c.first !== null) { current = D.marks.findIndex((m) => m.t === c.first); W.showTicks(c.first); say(); }
+  };
+  function say() {
+    const out = document.getElementById("cosim-violation");
+    if (!out) return;
+    if (current < 0 || current >= D.marks.length) { out.textContent = ""; return; }
+    const m = D.marks[current];
+    out.textContent = "violation " + (current + 1) + " of " + D.marks.length + ": check " + m.check + " (" + m.name +
+      ") at " + W.timeText(m.t) + ": " + m.value + " vs limit " + m.limit + (m.detail ? " (" + m.detail + ")" : "");
+  }
+  W.violation = function (which) {  // "first", "next", "previous"
+    if (!D.marks.length) return;
+    const mid = (B.xr.start + B.xr.end) / 2;
+    if (which === "first") current = 0;
+    else if (which === "next") {
+      const k = D.marks.findIndex((m) => m.t > mid + 0.5);
+      current = k < 0 ? D.marks.length - 1 : k;
+    } else {
+      let k = -1;
+      D.marks.forEach((m, i) => { if (m.t < mid - 0.5) k = i; });
+      current = k < 0 ? 0 : k;
+    }
+    W.showTicks(D.marks[current].t);
+    say();
+  };
+  function saveHash() {
+    if (applyingHash) return;
+    clearTimeout(hashTimer);
+    hashTimer = setTimeout(() => {
+      let hash = "#t=" + msText(B.xr.start) + "," + msText(B.xr.end);
+      if (custom) hash += "&rows=" + shown.map(encodeURIComponent).join(",");
+      if (location.hash !== hash) history.replaceState(null, "", hash);
+    }, 150);
+  }
+  function applyHash() {
+    const params = new URLSearchParams(location.hash.replace(/^#/, ""));
+    applyingHash = true;
+    if (params.has("rows")) {
+      const names = params.get("rows").split(",").map(decodeURIComponent).filter((n) => D.byName[n]);
+      shown = D.order.filter((n) => names.indexOf(n) >= 0); custom = true;
+    }
+    relayout(); syncBoxes();
+    if (params.has("t")) {
+      const [a, b] = params.get("t").split(",").map(Number);
+      if (Number.isFinite(a) && Number.isFinite(b) && b > a) setWindow(a * 1e6 / D.nsPerTick, b * 1e6 / D.nsPerTick);
+    }
+    applyingHash = false;
+    return params.has("t") || params.has("rows");
+  }
+  W.viewState = function () { return {start: B.xr.start, end: B.xr.end, rows: shown.slice()}; };
+  function syncBoxes() {
+    for (const box of document.querySelectorAll("input.cosim-row")) box.checked = shown.indexOf(box.value) >= 0;
+  }
+  W.toggle = function (box) {
+    const names = shown.filter((n) => n !== box.value);
+    if (box.checked) names.push(box.value);
+    W.setRows(names);
+  };
+
+  // -- start -------------------------------------------------------------------------------------
+  function ensure() {  // the page's data, decoded once (the axis may ask for it before the figure is ready)
+    if (D !== null) return D;
+    D = JSON.parse(document.getElementById("cosim-wave").textContent);
+    D.byName = {};
+    for (const row of D.rows) {
+      for (const k of ["t", "v", "left", "right", "rate"]) if (typeof row[k] === "string") row[k] = decode(row[k]);
+      if (row.seg) row.seg = decodeAll(row.seg);
+      D.byName[row.name] = row;
+    }
+    D.order = D.rows.map((r) => r.name);
+    return D;
+  }
+  W.init = function (models) {
+    performance.mark("cosim-draw-start");
+    B = models;
+    ensure();
+    performance.mark("cosim-decoded");
+    B.xr.setv({bounds: [0, D.end]});
+    B.spans.data = {t: D.marks.map((m) => m.t)};
+    shown = D.defaultRows.slice();
+    if (!applyHash()) { relayout(); setWindow(D.start, D.stop); }
+    window.addEventListener("hashchange", () => { if (applyHash()) schedule(); });
+    performance.mark("cosim-laid-out");
+    draw();
+    performance.mark("cosim-drawn-data");
+  };
+  W.changed = function () { schedule(); saveHash(); };
+})();
