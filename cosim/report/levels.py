@@ -12,8 +12,9 @@ finer levels go into ``waveform/`` next to the page, each cut in blocks of time,
   one) in blocks of :data:`BLOCK_RECORDS`, which the browser expands into pulses when few are in
   view.
 
-A side file is a script, ``cosimData("<file>", {...})``, whose arrays are little-endian float64 in
-base64 (exact for ticks below 2**53): a page opened from disk may load scripts but not read files.
+A side file is a script, ``cosimData("<file>", {...})``, whose arrays are packed by :func:`pack`
+(integers as int32 steps, else float64; deflated, in base64; exact for ticks below 2**53): a page
+opened from disk may load scripts but not read files.
 A level is described in the page as ``{"w": slice width [ticks] (0: records or segments),
 "blocks": [[from, to, file], ...]}`` where ``[from, to]`` bounds the times the block can show.
 """
@@ -22,6 +23,7 @@ from __future__ import annotations
 
 import base64
 import json
+import zlib
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -48,6 +50,30 @@ def b64(values: npt.ArrayLike) -> str:
     return base64.b64encode(np.ascontiguousarray(values, dtype="<f8").tobytes()).decode("ascii")
 
 
+def pack(values: npt.ArrayLike) -> dict[str, Any]:
+    """An array for a side file, compressed: integers as their first value and the int32 steps between
+    them (``enc`` ``i``), else float64 (``f``), deflated (zlib) and in base64 (``z``); the page inflates
+    it with the browser's ``DecompressionStream``.
+
+    Examples
+    --------
+    >>> packed = pack([3_600_000_000_000, 3_600_001_000_000, 3_600_002_000_000])
+    >>> packed["enc"], packed["first"], np.frombuffer(zlib.decompress(base64.b64decode(packed["z"])), "<i4").tolist()
+    ('i', 3600000000000.0, [1000000, 1000000])
+    """
+    a = np.asarray(values, dtype=np.float64)
+    if a.size and np.isfinite(a).all() and (a == np.round(a)).all():
+        steps = np.diff(a)
+        if not steps.size or np.abs(steps).max() < 2**31:
+            raw = steps.astype("<i4").tobytes()
+            return {"enc": "i", "first": float(a[0]), "n": int(a.size), "z": _deflate(raw)}
+    return {"enc": "f", "n": int(a.size), "z": _deflate(a.astype("<f8").tobytes())}
+
+
+def _deflate(raw: bytes) -> str:
+    return base64.b64encode(zlib.compress(raw, 1)).decode("ascii")
+
+
 class SideFiles:
     """The side files of one page, in ``<folder>/waveform/`` (made on the first file)."""
 
@@ -59,7 +85,7 @@ class SideFiles:
     def write(self, key: str, arrays: Mapping[str, npt.ArrayLike]) -> str:
         """Write one block; returns its path relative to the page."""
         self.folder.mkdir(parents=True, exist_ok=True)
-        payload = json.dumps({k: b64(v) for k, v in arrays.items()})
+        payload = json.dumps({k: pack(v) for k, v in arrays.items()})
         text = f"cosimData({json.dumps(key)}, {payload});\n"
         (self.folder / key).write_text(text, encoding="ascii")
         self.count += 1

@@ -29,8 +29,22 @@
     for (const k in obj) out[k] = decode(obj[k]);
     return out;
   }
-  window.cosimData = function (key, arrays) {
-    loaded["waveform/" + key] = decodeAll(arrays);
+  async function unpack(p) {  // an array of a side file (cosim.report.levels.pack)
+    const bin = atob(p.z), bytes = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+    const raw = await new Response(stream).arrayBuffer();
+    if (p.enc === "f") return new Float64Array(raw);
+    const steps = new Int32Array(raw), out = new Float64Array(p.n);
+    let acc = p.first;
+    if (p.n) out[0] = acc;
+    for (let i = 0; i < steps.length; i++) { acc += steps[i]; out[i + 1] = acc; }
+    return out;
+  }
+  window.cosimData = async function (key, arrays) {
+    const out = {};
+    for (const k in arrays) out[k] = await unpack(arrays[k]);
+    loaded["waveform/" + key] = out;
     schedule();
   };
   function need(file) {
@@ -193,6 +207,7 @@
     B.quads.data = quads;
     B.texts.data = texts;
     B.markPoints.data = marksY;
+    W.draws = (W.draws || 0) + 1;
     if (!firstDrawn) {
       firstDrawn = true;
       requestAnimationFrame(() => requestAnimationFrame(() => { performance.mark("cosim-first-draw"); W.drawn = true; }));
@@ -274,6 +289,7 @@
       }
     }
     row.showing = pulses === null ? "rate" : "pulses";
+    row.drawnPulses = pulses === null ? null : Array.from(pulses.t);
     if (pulses !== null) {
       for (let i = 0; i < pulses.t.length; i++) {
         quads.left.push(pulses.t[i]); quads.right.push(pulses.t[i] + pulses.width[i]);
@@ -356,7 +372,10 @@
   W.violation = function (which) {  // "first", "next", "previous"
     if (!D.marks.length) return;
     const mid = (B.xr.start + B.xr.end) / 2;
+    const known = current >= 0 && current < D.marks.length && D.marks[current].t >= B.xr.start &&
+      D.marks[current].t <= B.xr.end;  // the one shown last is still in view: step from it
     if (which === "first") current = 0;
+    else if (known) current = Math.max(0, Math.min(D.marks.length - 1, current + (which === "next" ? 1 : -1)));
     else if (which === "next") {
       const k = D.marks.findIndex((m) => m.t > mid + 0.5);
       current = k < 0 ? D.marks.length - 1 : k;
@@ -392,6 +411,12 @@
     applyingHash = false;
     return params.has("t") || params.has("rows");
   }
+  W.lanes = function () {  // what is drawn, top to bottom: for a reader's tools and the browser test
+    return layout.map((l) => ({name: l.band === "row" ? l.row.name : l.band, top: l.top, h: l.h,
+                               showing: l.row ? l.row.showing || "values" : l.band,
+                               pulses: l.row ? l.row.drawnPulses || null : null,
+                               names: l.names || null}));
+  };
   W.viewState = function () { return {start: B.xr.start, end: B.xr.end, rows: shown.slice()}; };
   function syncBoxes() {
     for (const box of document.querySelectorAll("input.cosim-row")) box.checked = shown.indexOf(box.value) >= 0;
