@@ -8,6 +8,7 @@ disk and can be moved or zipped. The Bokeh library is loaded from ``report_files
 from __future__ import annotations
 
 import html
+import json
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -17,7 +18,7 @@ from typing import Any
 
 from cosim.report.text import humanize_ns, number_text, rst_html, rst_inline, time_text, value_text
 from cosim.report.verdicts import VERDICTS, badge, meaning
-from cosim.report.waveform import violation_unit
+from cosim.report.waveform import MARGIN_PX, violation_text
 
 #: Files of a results folder the page describes, in this order (other files are listed after them).
 FILES = {
@@ -136,7 +137,8 @@ def page(entry: Entry, *, out: Path, scripts: str, plot_script: str, plot_divs: 
         parts.append(f"<p class='lead'>{rst_inline(first)}</p>")
     if rest.strip():
         parts.append(f"<details class='doc'><summary>whole description</summary>{rst_html(rest.strip())}</details>")
-    parts += [_problems(r), _checks(r, wave_data is not None, units), _figures(r)]
+    states = {row.name: row.states for row in rows if row.states}
+    parts += [_problems(r), _checks(r, wave_data is not None, units, states), _figures(r)]
     parts.append("<h2 id='waveform'>Waveform</h2>")
     if wave_data is None:
         parts.append("<p>No trace was written for this run.</p>")
@@ -154,7 +156,8 @@ def page(entry: Entry, *, out: Path, scripts: str, plot_script: str, plot_divs: 
                      "red lines: check violations.</p>"
                      "<div id='cosim-readout' class='readout'>point at a row to read its value</div>")
         parts.append(f"<script type='application/json' id='cosim-wave'>{wave_data}</script>")
-        parts.append(plot_divs[0] if plot_divs else "")
+        height = json.loads(wave_data)["height"] + MARGIN_PX if wave_data else 400
+        parts.append(f"<div id='cosim-plot' style='height:{height}px'>{plot_divs[0] if plot_divs else ''}</div>")
         if notes:
             parts.append("<p class='note'>Held in the page in reduced form:</p><ul class='note'>"
                          + "".join(f"<li>{html.escape(n)}</li>" for n in notes) + "</ul>")
@@ -232,7 +235,8 @@ def _files(folder: Path) -> str:
             else "<h2 id='files'>Files</h2><p>none written</p>")
 
 
-def _checks(r: Mapping[str, Any], drawn: bool, units: Mapping[str, str]) -> str:
+def _checks(r: Mapping[str, Any], drawn: bool, units: Mapping[str, str],
+            states: Mapping[str, Mapping[int, str]]) -> str:
     checks = r.get("checks", [])
     if not checks:
         return "<h2 id='checks'>Checks</h2><p>This run has no checks.</p>"
@@ -243,13 +247,12 @@ def _checks(r: Mapping[str, Any], drawn: bool, units: Mapping[str, str]) -> str:
         for v in c.get("violations", [])[:5]:
             if v.get("t_ns") is None:
                 continue
-            unit = violation_unit(c, v, units)
+            value, limit = violation_text(c, v, units, states.get(signal))
             detail = f" ({humanize_ns(str(v['detail']))})" if v.get("detail") else ""
             when = time_text(int(v["t_ns"]))
             link = (f"<a href='#waveform' onclick='cosimWave.showNs({int(v['t_ns'])})'>{when}</a>" if drawn
                     else when)
-            shown.append(f"{link}: {html.escape(value_text(v.get('value'), unit))} vs limit "
-                         f"{html.escape(value_text(v.get('limit'), unit))}{html.escape(detail)}")
+            shown.append(f"{link}: {html.escape(value)} vs limit {html.escape(limit)}{html.escape(detail)}")
         more = int(c.get("n_violations", 0)) - len(shown)
         if more > 0 and shown:
             shown.append(f"... and {more:,} more ({c.get('n_violations'):,} in all; result.json lists the first)")

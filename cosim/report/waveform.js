@@ -80,11 +80,10 @@
   }
 
   // -- layout ------------------------------------------------------------------------------------
-  const HEIGHT = {bit: 26, pulse: 42, int: 40, real: 54};
-  function bandHeight(row) {
-    if (row.quiet || row.constant) return 22;
-    if (row.kind === "int" && row.states) return 30;
-    return HEIGHT[row.kind];
+  function bandHeight(row) {  // (the same as cosim.report.waveform's)
+    if (row.quiet || row.constant) return D.bandPx.constant;
+    if (row.kind === "int" && row.states) return D.bandPx.states;
+    return D.bandPx[row.kind];
   }
   function relayout() {
     layout = [];
@@ -102,8 +101,8 @@
     }
     const folded = D.quiet.filter((n) => shown.indexOf(n) < 0);
     if (folded.length) {
-      layout.push({band: "quiet", top: y, h: 22, names: folded});
-      y += 22;
+      layout.push({band: "quiet", top: y, h: D.quietPx, names: folded});
+      y += D.quietPx;
     }
     total = Math.max(y, 20);
     const ticks = [], labels = {};
@@ -116,7 +115,8 @@
     B.yr.setv({start: total, end: 0});
     laneNames = labels;
     B.ticker.ticks = ticks;
-    B.fig.height = total + 70;
+    const box = document.getElementById("cosim-plot");  // the figure fills it (stretch_both)
+    if (box && box.style.height !== (total + D.margin) + "px") box.style.height = (total + D.margin) + "px";
     const bands = {y0: [], y1: [], color: []};
     layout.forEach((lane, k) => {
       bands.y0.push(lane.top); bands.y1.push(lane.top + lane.h);
@@ -214,6 +214,7 @@
     }
   }
 
+  const BINS = 1200;  // slices of the window a crowded row is drawn in (about its pixels)
   function yOf(row, v, top, h) {
     if (row.high === row.low) return top + h / 2;
     return top + (row.high - v) / (row.high - row.low) * h;
@@ -237,7 +238,7 @@
     }
     lines.xs.push(xs); lines.ys.push(ys); lines.color.push(row.kind === "bit" ? "#2a9d3f" : "#333333");
     const labelled = row.states || row.kind === "bit";
-    if (row.kind === "bit" && i1 - i0 < 20000) {
+    if (row.kind === "bit" && i1 - i0 < 2 * BINS) {
       for (let i = i0; i < i1 - 1; i++) {
         if (v[i] > 0) { quads.left.push(t[i]); quads.right.push(t[i + 1]); quads.bottom.push(top + h); quads.top.push(top); quads.color.push("#2a9d3f"); quads.alpha.push(0.18); }
       }
@@ -301,11 +302,28 @@
     }
     const r = trainRates(row, a, b);
     const i0 = Math.max(upperBound(r.left, a) - 1, 0), i1 = lowerBound(r.left, b);
-    for (let i = i0; i < i1; i++) {
-      if (r.right[i] < a) continue;
-      quads.left.push(r.left[i]); quads.right.push(r.right[i]);
-      quads.bottom.push(zero); quads.top.push(yOf(row, r.rate[i], top, h));
-      quads.color.push(r.rate[i] >= 0 ? D.up : D.down); quads.alpha.push(0.45);
+    if (i1 - i0 > BINS) {  // more blocks than pixels: each pixel's pulses over its width (the mean rate there)
+      const width = (b - a) / BINS, up = new Float64Array(BINS), down = new Float64Array(BINS);
+      for (let i = i0; i < i1; i++) {
+        const area = r.rate[i] * (r.right[i] - r.left[i]), k = Math.floor((Math.max(r.left[i], a) - a) / width);
+        if (k < 0 || k >= BINS) continue;
+        if (area >= 0) up[k] += area; else down[k] += area;
+      }
+      for (let k = 0; k < BINS; k++) {
+        for (const area of [up[k], down[k]]) {
+          if (area === 0) continue;
+          quads.left.push(a + k * width); quads.right.push(a + (k + 1) * width);
+          quads.bottom.push(zero); quads.top.push(yOf(row, area / width, top, h));
+          quads.color.push(area >= 0 ? D.up : D.down); quads.alpha.push(0.45);
+        }
+      }
+    } else {
+      for (let i = i0; i < i1; i++) {
+        if (r.right[i] < a) continue;
+        quads.left.push(r.left[i]); quads.right.push(r.right[i]);
+        quads.bottom.push(zero); quads.top.push(yOf(row, r.rate[i], top, h));
+        quads.color.push(r.rate[i] >= 0 ? D.up : D.down); quads.alpha.push(0.45);
+      }
     }
     lines.xs.push([a, b]); lines.ys.push([zero, zero]); lines.color.push("#bbb");
     texts.x.push(a + 4 * px); texts.y.push(top + 6);

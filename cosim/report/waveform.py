@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -70,14 +71,15 @@ class Waveform:
 def violation_unit(check: Mapping[str, Any], violation: Mapping[str, Any], units: Mapping[str, str]) -> str:
     """The unit of a violation's value and limit: its own ``unit`` (or the check's ``unit``), else the
     unit of the check's signal when the detail reads the signal's value (``<signal> = ...``), else
-    ``ns`` when the value is a time the detail or the check's figures give in ns."""
+    ``ns`` when the value is a time the detail or the check's figures give in ns, else the signal's unit
+    when the detail gives the value in it."""
     for source in (violation, check):
         if source.get("unit") is not None and "unit" in source:
             return str(source["unit"])
     signal = str(check.get("signal") or "")
     detail = str(violation.get("detail") or "")
     value = violation.get("value")
-    if signal and detail.startswith(f"{signal} = "):
+    if signal and re.search(rf"(?:^|\bof ){re.escape(signal)}(?: =| is) ", detail):  # the signal's own value
         return units.get(signal, "")
     if isinstance(value, int | float) and not isinstance(value, bool):
         measured = check.get("measured") or {}
@@ -86,7 +88,31 @@ def violation_unit(check: Mapping[str, Any], violation: Mapping[str, Any], units
             return "ns"
         if any(k.endswith("_hz") and v == value for k, v in measured.items()):
             return "Hz"
+        unit = units.get(signal, "")
+        if unit and (f"{value:g} {unit}" in detail or f"{value} {unit}" in detail):  # "position 27.4 units"
+            return unit
     return ""
+
+
+def violation_text(check: Mapping[str, Any], violation: Mapping[str, Any], units: Mapping[str, str],
+                   states: Mapping[int, str] | None = None) -> tuple[str, str]:
+    """A violation's value and limit in words, with their unit (a state by its name).
+
+    Examples
+    --------
+    >>> check = {"signal": "pmac.ect.time_zero_pos"}
+    >>> violation_text(check, {"value": 500, "limit": "1500 ± 0.5",
+    ...                        "detail": "value of pmac.ect.time_zero_pos is 500, expected 1500 ± 0.5"},
+    ...                {"pmac.ect.time_zero_pos": "counts"})
+    ('500 counts', '1500 ± 0.5 counts')
+    """
+    unit = violation_unit(check, violation, units)
+    named = states if unit == units.get(str(check.get("signal") or ""), "") else None
+    value, limit = violation.get("value", ""), violation.get("limit", "")
+    limit_text = value_text(limit, unit, named)
+    if isinstance(limit, str) and unit and unit != "ns" and re.search(r"\d$", limit.strip()):
+        limit_text = f"{limit} {unit}"  # a rule written as text that ends in a number of the signal's unit
+    return value_text(value, unit, named), limit_text
 
 
 def violations_of(checks: Sequence[Mapping[str, Any]], resolution_s: Fraction,
@@ -100,10 +126,8 @@ def violations_of(checks: Sequence[Mapping[str, Any]], resolution_s: Fraction,
         listed = [v for v in check.get("violations", []) if v.get("t_ns") is not None]
         named = (states or {}).get(str(check.get("signal") or ""))
         for v in listed[:MAX_VIOLATIONS]:
-            unit = violation_unit(check, v, units)
-            marks.append(Marked(str(check["name"]), ticks_of_ns(v["t_ns"], resolution_s),
-                                value_text(v.get("value", ""), unit, named),
-                                value_text(v.get("limit", ""), unit, named),
+            value, limit = violation_text(check, v, units, named)
+            marks.append(Marked(str(check["name"]), ticks_of_ns(v["t_ns"], resolution_s), value, limit,
                                 humanize_ns(str(v.get("detail") or "")), number))
         total = int(check.get("n_violations", len(listed)))
         if total > min(len(listed), MAX_VIOLATIONS):
@@ -165,6 +189,19 @@ def _row_data(row: Row) -> dict[str, Any]:
     return data
 
 
+#: Height of a row's band [px] by kind (an int with named states, a constant or quiet row: less).
+BAND_PX = {"bit": 26, "pulse": 42, "int": 40, "real": 54, "states": 30, "constant": 22}
+QUIET_PX = 22
+#: The figure's height above and below its bands (toolbar, time axes) [px].
+MARGIN_PX = 70
+
+
+def _band_px(row: Row) -> int:
+    if row.quiet or (row.kind != "pulse" and row.distinct <= 1):
+        return BAND_PX["constant"]
+    return BAND_PX["states"] if row.kind == "int" and row.states else BAND_PX[row.kind]
+
+
 def _finite(value: float, default: float = 0.0) -> float:
     return value if math.isfinite(value) else default
 
@@ -187,7 +224,10 @@ def build(trace: Trace, checks: Sequence[Mapping[str, Any]], *, name: str = "run
         numbered[number] = {"number": number, "name": str(c.get("name")), "rows": rows_read,
                             "first": min(listed) if listed else None,
                             "marks": sum(m.number == number for m in marks)}
-    data = {"end": end_t, "nsPerTick": ns_per_tick, "start": start, "stop": end, "cap": pulse_cap,
+    shown = [r for r in rows if not r.quiet or r.checked]
+    height = ((14 + 16 * sum(1 for c in numbered.values() if c["marks"])) if marks else 0) + sum(
+        _band_px(r) for r in shown) + (QUIET_PX if len(shown) < len(rows) else 0)
+    data = {"end": end_t, "height": height, "margin": MARGIN_PX, "bandPx": BAND_PX, "quietPx": QUIET_PX, "nsPerTick": ns_per_tick, "start": start, "stop": end, "cap": pulse_cap,
             "up": UP, "down": DOWN,
             "rows": [_row_data(r) for r in rows],
             "defaultRows": [r.name for r in rows if not r.quiet or r.checked],
@@ -221,7 +261,7 @@ def figure_html() -> tuple[str, str]:
 
     x_range = Range1d(start=0, end=1, bounds=(0, 1), min_interval=10, name=TIME_RANGE)
     y_range = Range1d(start=100, end=0, name="lanes")
-    plot: Any = figure(x_range=x_range, y_range=y_range, height=400, sizing_mode="stretch_width", name="waveform",
+    plot: Any = figure(x_range=x_range, y_range=y_range, sizing_mode="stretch_both", name="waveform",
                        tools="xpan,xwheel_zoom,xbox_zoom,reset,save", toolbar_location="above",
                        min_border_left=10, min_border_right=16, output_backend="canvas")
     plot.xgrid.grid_line_alpha = 0.3
