@@ -10,8 +10,8 @@ import base64
 import json
 import re
 import subprocess
-import zlib
 import sys
+import zlib
 from fractions import Fraction
 from html.parser import HTMLParser
 from pathlib import Path

@@ -69,11 +69,17 @@ def browser() -> Iterator[Any]:
         chromium.close()
 
 
-def _open(browser: Any, path: Path, fragment: str = "") -> tuple[Any, list[str]]:
+def _new_page(browser: Any) -> tuple[Any, list[str]]:
+    """A page, and the errors and warnings it will write to its console."""
     page = browser.new_page(viewport={"width": 1400, "height": 900})
     messages: list[str] = []
     page.on("console", lambda m: messages.append(f"{m.type}: {m.text}") if m.type in ("error", "warning") else None)
     page.on("pageerror", lambda e: messages.append(f"page error: {e}"))
+    return page, messages
+
+
+def _open(browser: Any, path: Path, fragment: str = "") -> tuple[Any, list[str]]:
+    page, messages = _new_page(browser)
     page.goto(path.resolve().as_uri() + fragment)
     page.wait_for_function(READY)
     return page, messages
@@ -98,11 +104,7 @@ def test_every_page_loads_cleanly_draws_every_signal_and_first_draws_quickly(sit
     assert sorted(links) == sorted(str(p.relative_to(site)) for p in _pages(site)) and len(links) == 4
     timings = {}
     for path in _pages(site):
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        messages = []
-        page.on("console", lambda m: messages.append(f"{m.type}: {m.text}") if m.type in ("error", "warning")
-                else None)
-        page.on("pageerror", lambda e: messages.append(f"page error: {e}"))
+        page, messages = _new_page(browser)
         cdp = page.context.new_cdp_session(page)
         cdp.send("Performance.enable")
         before = {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
