@@ -19,10 +19,15 @@
   let B = null, D = null, shown = [], custom = false, layout = [], total = 0, scheduled = false;
   let laneNames = {}, firstDrawn = false, hashTimer = null, current = -1, applyingHash = false;
 
-  function decode(s) {
+  function bytesOf(s) {  // base64 to bytes (natively where the browser can)
+    if (Uint8Array.fromBase64) return Uint8Array.fromBase64(s);
     const bin = atob(s), bytes = new Uint8Array(bin.length);
     for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-    return new Float64Array(bytes.buffer);
+    return bytes;
+  }
+  function decode(s) {
+    const bytes = bytesOf(s);
+    return new Float64Array(bytes.buffer, bytes.byteOffset, bytes.length / 8);
   }
   function decodeAll(obj) {
     const out = {};
@@ -30,9 +35,7 @@
     return out;
   }
   async function unpack(p) {  // an array of a side file (cosim.report.levels.pack)
-    const bin = atob(p.z), bytes = new Uint8Array(bin.length);
-    for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
-    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream("deflate"));
+    const stream = new Blob([bytesOf(p.z)]).stream().pipeThrough(new DecompressionStream("deflate"));
     const raw = await new Response(stream).arrayBuffer();
     if (p.enc === "f") return new Float64Array(raw);
     const steps = new Int32Array(raw), out = new Float64Array(p.n);
@@ -62,11 +65,11 @@
   function unitFor(spanNs) {
     return spanNs >= 2e9 ? ["s", 1e9] : spanNs >= 2e6 ? ["ms", 1e6] : spanNs >= 2e3 ? ["us", 1e3] : ["ns", 1];
   }
+  const NUMBER = new Intl.NumberFormat("en", {maximumFractionDigits: 9});
   W.timeText = function (ticks, spanTicks) {
-    ensure();
-    const ns = ticks * D.nsPerTick;
+    const ns = ticks * (D === null ? ensure() : D).nsPerTick;
     const [u, f] = unitFor(Math.abs(spanTicks === undefined ? ns : spanTicks * D.nsPerTick));
-    return Number((ns / f).toPrecision(12)).toLocaleString("en", {maximumFractionDigits: 9}) + " " + u;
+    return NUMBER.format(Number((ns / f).toPrecision(12))) + " " + u;
   };
   function msText(ticks) {
     return String(Number((ticks * D.nsPerTick / 1e6).toFixed(6)));
