@@ -100,7 +100,7 @@ def summary(entries: Sequence[Entry], out: Path) -> str:
                     f"<td class='num'>{s.get('passed', 0)}</td><td class='num'>{s.get('failed', 0)}</td>"
                     f"<td class='num'>{s.get('unchecked', 0)}</td>"
                     f"<td class='num'>{_hazards(s)}</td>"
-                    f"<td>{html.escape(first)}</td><td class='num'>{float(r.get('simulated_s', 0)):g}</td>"
+                    f"<td>{rst_inline(first)}</td><td class='num'>{float(r.get('simulated_s', 0)):g}</td>"
                     f"<td class='num'>{float(r.get('wall_time_s', 0)):.2f}</td></tr>")
     legend = "".join(f"<li>{badge(v)} {html.escape(m)}</li>" for v, (_, m) in VERDICTS.items())
     return (head("cosim report") + f"<h1>cosim report</h1><p>{len(entries)} runs: {total or 'none'}.</p>"

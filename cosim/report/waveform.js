@@ -29,9 +29,14 @@
     const bytes = bytesOf(s);
     return new Float64Array(bytes.buffer, bytes.byteOffset, bytes.length / 8);
   }
+  function decodeAny(x) {  // float64 in base64, or {i4: int32 in base64}, as a Float64Array
+    if (typeof x === "string") return decode(x);
+    const bytes = bytesOf(x.i4);
+    return Float64Array.from(new Int32Array(bytes.buffer, bytes.byteOffset, bytes.length / 4));
+  }
   function decodeAll(obj) {
     const out = {};
-    for (const k in obj) out[k] = decode(obj[k]);
+    for (const k in obj) out[k] = decodeAny(obj[k]);
     return out;
   }
   async function unpack(p) {  // an array of a side file (cosim.report.levels.pack)
@@ -347,8 +352,10 @@
     if (lane && lane.band === "row") {
       const row = lane.row;
       if (row.kind === "pulse") {
-        text += "   " + row.name + ": " + (row.showing === "pulses" ? "pulses drawn one by one" : "rate drawn") +
-          (row.unit ? " [" + row.unit + "]" : "");
+        const r = trainRates(row, B.xr.start, B.xr.end), i = upperBound(r.left, x) - 1;
+        const rate = i >= 0 && r.right[i] > x ? r.rate[i] : 0;
+        text += "   " + row.name + ": " + valueText({unit: "pulses/s"}, Number(rate.toPrecision(6))) +
+          (row.showing === "pulses" ? " (its pulses drawn one by one)" : "");
       } else {
         const pts = row.quiet || row.constant ? {t: row.t, v: row.v} : valuePoints(row, B.xr.start, B.xr.end);
         text += "   " + row.name + " = " + valueText(row, valueAt(row, pts, x));
@@ -454,7 +461,7 @@
     D = JSON.parse(document.getElementById("cosim-wave").textContent);
     D.byName = {};
     for (const row of D.rows) {
-      for (const k of ["t", "v", "left", "right", "rate"]) if (typeof row[k] === "string") row[k] = decode(row[k]);
+      for (const k of ["t", "v", "left", "right", "rate"]) if (row[k] !== undefined) row[k] = decodeAny(row[k]);
       if (row.seg) row.seg = decodeAll(row.seg);
       D.byName[row.name] = row;
     }

@@ -18,6 +18,7 @@ whole run, unless the URL says otherwise (``#t=<from ms>,<to ms>&rows=<name>,...
 
 from __future__ import annotations
 
+import base64
 import json
 import math
 import re
@@ -27,6 +28,8 @@ from fractions import Fraction
 from functools import cache
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from cosim.report import levels as side_levels
 from cosim.report.levels import SideFiles, b64
@@ -183,9 +186,9 @@ def _row_data(row: Row) -> dict[str, Any]:
         data["unit"] = "pulses/s"
         data.update(left=b64(row.left), right=b64(row.right), rate=b64(row.rate_hz))
         if row.segments:
-            data["seg"] = {k: b64(a) for k, a in row.segments.items()}
+            data["seg"] = {k: _compact(a) for k, a in row.segments.items()}
     else:
-        data.update(t=b64(row.t), v=b64(row.v))
+        data.update(t=b64(row.t), v=_compact(row.v))
     return data
 
 
@@ -200,6 +203,16 @@ def _band_px(row: Row) -> int:
     if row.quiet or (row.kind != "pulse" and row.distinct <= 1):
         return BAND_PX["constant"]
     return BAND_PX["states"] if row.kind == "int" and row.states else BAND_PX[row.kind]
+
+
+def _compact(values: Any) -> str | dict[str, str]:
+    """An array for the page: int32 in base64 (``{"i4": ...}``) when its values are such integers, else
+    float64 in base64 (a string)."""
+    a = np.asarray(values)
+    if a.size and (a.dtype.kind in "iu" or (np.isfinite(a).all() and (a == np.round(a)).all())) and \
+            np.abs(a).max() < 2**31:
+        return {"i4": base64.b64encode(a.astype("<i4").tobytes()).decode("ascii")}
+    return b64(a)
 
 
 def _finite(value: float, default: float = 0.0) -> float:
