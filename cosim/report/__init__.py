@@ -5,18 +5,20 @@
     :mod:`cosim.report.verdicts`), checks passed and failed, the first line of its description and a
     link to its page.
 ``<out>/<run>/index.html``
-    One page per run, next to the run's files: its description, parameters, checks with their
-    violations (each a link that shows it in the waveform), figures, notes, links to ``result.json``,
-    the VCDs, the GTKWave view and the tables, then the waveform (:mod:`cosim.report.waveform`):
-    every signal of the trace on one linked time axis, pulse trains from their segments,
-    violations marked, opening on the first violation; and the XY path of a gated axis
-    (:mod:`cosim.report.xy`).
-``<out>/report_files/bokeh-<version>.min.js``
-    The plotting library, once for every page (``inline=True`` puts it in each page instead, about
-    1.3 MB a page, for a page that travels alone).
+    One page per run, next to the run's files (:mod:`cosim.report.pages`): its verdict, description,
+    checks with their violations in units (each a link that shows it in the waveform), figures, the
+    waveform, the run's console, the settings set but not modelled, notes, parameters and files.
+    The waveform (:mod:`cosim.report.waveform`) is one figure for every signal, in the order a reader
+    needs (:mod:`cosim.report.rows`), drawn by the page's script from data prepared once, the view
+    kept in the page's address; the XY path of a gated axis (:mod:`cosim.report.xy`) below it.
+``<out>/<run>/waveform/``
+    A long run's finer levels, loaded when the view zooms in (:mod:`cosim.report.levels`).
+``<out>/report_files/``
+    The plotting library (``bokeh-<version>.min.js``) and the waveform's script, once for every page
+    (``inline=True`` puts them in each page instead, about 1.3 MB a page, for a page that travels
+    alone).
 
-Every link is relative. What a page embeds is bounded (see :mod:`cosim.report.rows`); a page says
-what it reduced.
+Every link is relative. What a page embeds is bounded; a page says what it holds reduced.
 """
 
 from __future__ import annotations
