@@ -16,6 +16,7 @@
   const W = {};
   window.cosimWave = W;
   const loaded = {}, requested = {};
+  const BINS = 1200;  // slices of the window a crowded row is drawn in (about its pixels)
   let B = null, D = null, shown = [], custom = false, layout = [], total = 0, scheduled = false;
   let laneNames = {}, firstDrawn = false, hashTimer = null, current = -1, applyingHash = false;
 
@@ -138,8 +139,11 @@
   function lowerBound(a, x) { let lo = 0, hi = a.length; while (lo < hi) { const m = (lo + hi) >> 1; if (a[m] < x) lo = m + 1; else hi = m; } return lo; }
   function upperBound(a, x) { let lo = 0, hi = a.length; while (lo < hi) { const m = (lo + hi) >> 1; if (a[m] <= x) lo = m + 1; else hi = m; } return lo; }
 
-  function pickLevel(row, span) {  // the coarsest level whose slices are narrower than a pixel or two
-    const want = span / 1500;
+  function overviewFits(span) {  // are the page's own slices (the overview) about a pixel wide, or finer?
+    return D.end / D.buckets <= span / BINS;
+  }
+  function pickLevel(row, span) {  // the coarsest level whose slices are about a pixel wide, or finer
+    const want = span / BINS;
     for (const level of row.detail) if (level.w <= want) return level;
     return row.detail[row.detail.length - 1];
   }
@@ -162,7 +166,7 @@
     return out;
   }
   function valuePoints(row, a, b) {
-    if (!row.detail.length) return {t: row.t, v: row.v};
+    if (!row.detail.length || overviewFits(b - a)) return {t: row.t, v: row.v};
     const level = pickLevel(row, b - a);
     const got = gather(level, a, b, ["t", "v"]);
     if (got === null || got.t.length === 0) return {t: row.t, v: row.v};
@@ -222,7 +226,6 @@
     }
   }
 
-  const BINS = 1200;  // slices of the window a crowded row is drawn in (about its pixels)
   function yOf(row, v, top, h) {
     if (row.high === row.low) return top + h / 2;
     return top + (row.high - v) / (row.high - row.low) * h;
@@ -268,10 +271,10 @@
   }
 
   function trainRates(row, a, b) {  // {left, right, rate} for the window, from the finest suitable level loaded
-    if (!row.detail.length) return {left: row.left, right: row.right, rate: row.rate, exact: true};
+    if (!row.detail.length || overviewFits(b - a)) return {left: row.left, right: row.right, rate: row.rate};
     const levels = row.detail.filter((l) => l.w > 0);
     let use = null;
-    const want = (b - a) / 1500;
+    const want = (b - a) / BINS;
     for (const level of levels) {
       const got = gather(level, a, b, ["left", "rate"]);
       if (got !== null) use = {level: level, data: got};

@@ -33,7 +33,7 @@ import numpy as np
 
 from cosim.report import levels as side_levels
 from cosim.report.levels import SideFiles, b64
-from cosim.report.rows import Row, named_signals, reader_order, records, ticks_of_ns, train_row, value_row
+from cosim.report.rows import BUCKETS, Row, named_signals, reader_order, records, ticks_of_ns, train_row, value_row
 from cosim.report.text import humanize_ns, value_text
 from cosim.trace import Trace
 
@@ -240,8 +240,8 @@ def build(trace: Trace, checks: Sequence[Mapping[str, Any]], *, name: str = "run
     shown = [r for r in rows if not r.quiet or r.checked]
     height = ((14 + 16 * sum(1 for c in numbered.values() if c["marks"])) if marks else 0) + sum(
         _band_px(r) for r in shown) + (QUIET_PX if len(shown) < len(rows) else 0)
-    data = {"end": end_t, "height": height, "margin": MARGIN_PX, "bandPx": BAND_PX, "quietPx": QUIET_PX,
-            "nsPerTick": ns_per_tick, "start": start, "stop": end, "cap": pulse_cap,
+    data = {"end": end_t, "buckets": BUCKETS, "height": height, "margin": MARGIN_PX, "bandPx": BAND_PX,
+            "quietPx": QUIET_PX, "nsPerTick": ns_per_tick, "start": start, "stop": end, "cap": pulse_cap,
             "up": UP, "down": DOWN,
             "rows": [_row_data(r) for r in rows],
             "defaultRows": [r.name for r in rows if not r.quiet or r.checked],
