@@ -395,3 +395,9 @@ def test_the_same_run_gives_the_same_page_byte_for_byte(tmp_path: Path) -> None:
         pages.append((tmp_path / str(k) / "demo" / "index.html").read_bytes())
     assert pages[0] == pages[1]
     assert b"docs_json" in pages[0]  # a Bokeh page indeed
+
+
+def test_the_main_job_says_the_cpu_and_wall_time_of_what_it_measured() -> None:
+    from cosim.mainjob import Stopwatch
+
+    assert re.fullmatch(r"\d+\.\d s CPU, \d+\.\d s wall", Stopwatch().stop())
