@@ -207,7 +207,8 @@
       }
       if (lane.band === "quiet") {
         texts.x.push(a + 4 * px); texts.y.push(lane.top + lane.h / 2);
-        texts.text.push(lane.names.map((n) => n + " = " + valueText(D.byName[n], D.byName[n].value)).join(", "));
+        texts.text.push(lane.names.map((n) => D.byName[n].kind === "pulse" ? n + ": no pulses"
+          : n + " = " + valueText(D.byName[n], D.byName[n].value)).join(", "));
         texts.color.push("#666");
         continue;
       }
