@@ -83,6 +83,9 @@ def _args_run(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--format", choices=("parquet", "csv"), default="parquet",
                         help="format of the trace tables (default parquet)")
     parser.add_argument("--no-vcd", action="store_true", help="do not write trace.vcd")
+    parser.add_argument("--plain-vcd", action="store_true",
+                        help="write trace.vcd and trace_digital.vcd as text even for a long run (by default a run "
+                             "of more than 20 million changes gets one compressed trace.vcd.gz)")
     _allow_unchecked(parser)
 
 
@@ -124,7 +127,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     scenario = _load(args)
     assert isinstance(scenario, ScenarioFile)
     out = args.out or Path("results") / scenario.name
-    formats = (() if args.no_vcd else ("vcd",)) + (args.format,)
+    formats = (() if args.no_vcd else ("vcd-plain" if args.plain_vcd else "vcd",)) + (args.format,)
     result = run_scenario(scenario, overrides=_parse_sets(args.overrides), seed=args.seed, until=args.until,
                           out=out, formats=formats, progress=True)
     print(result.table())

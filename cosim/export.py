@@ -10,7 +10,8 @@ What is written (``formats``):
 ``console.txt``         (by the runner, :func:`write_console`) every console line: time, source, text
 ``vcd``                 ``trace.vcd`` (every signal), ``trace_digital.vcd`` (bits and pulse trains only,
                         for sigrok / PulseView) and ``trace.gtkw`` (a GTKWave view of ``trace.vcd``);
-                        see :mod:`cosim.export_vcd`
+                        for a long run ``trace.vcd.gz`` and its ``trace.gtkw`` instead; see
+                        :mod:`cosim.export_vcd` (``vcd-plain``: always the plain files)
 ``parquet`` / ``csv``   the four tables below, as ``<table>.parquet`` or ``<table>.csv``; ``csv`` also
                         writes ``trace_wide.csv`` (one column per signal, time in seconds, for
                         spreadsheets; see :mod:`cosim.export_wide`)
@@ -39,14 +40,14 @@ import numpy as np
 import pandas as pd
 
 from cosim.errors import ConfigurationError
-from cosim.export_vcd import write_gtkw, write_vcd
+from cosim.export_vcd import write_waveforms
 from cosim.export_wide import write_wide_csv
 from cosim.trace import Trace
 
 _TABLES = ("edges", "values", "segments", "pulses")
 _COLUMNS = {"edges": ("signal", "t", "value"), "values": ("signal", "t", "value"),
             "segments": ("signal", "t0", "duration", "count", "dir", "width"), "pulses": ("signal", "t", "dir")}
-FORMATS = ("vcd", "parquet", "csv")
+FORMATS = ("vcd", "vcd-plain", "parquet", "csv")
 META = "trace_meta.json"
 #: Rows gathered before a Parquet row group (or a CSV block) is written.
 _BLOCK_ROWS = 1 << 17
@@ -75,9 +76,8 @@ def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = 
     folder.mkdir(parents=True, exist_ok=True)
     (folder / META).write_text(json.dumps(trace.header(), indent=1, default=str))
     for fmt in formats:
-        if fmt == "vcd":
-            write_vcd(trace, folder / "trace.vcd", digital=folder / "trace_digital.vcd")
-            write_gtkw(trace, folder / "trace.gtkw", vcd="trace.vcd")
+        if fmt in ("vcd", "vcd-plain"):
+            write_waveforms(trace, folder, compress=False if fmt == "vcd-plain" else None)
         else:
             write_tables(trace, folder, fmt)
             if fmt == "csv":

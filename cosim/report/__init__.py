@@ -5,23 +5,26 @@
     :mod:`cosim.report.verdicts`), checks passed and failed, the first line of its description and a
     link to its page.
 ``<out>/<run>/index.html``
-    One page per run, next to the run's files: its description, parameters, checks with their
-    violations (each a link that shows it in the waveform), figures, notes, links to ``result.json``,
-    the VCDs, the GTKWave view and the tables, then the waveform (:mod:`cosim.report.waveform`):
-    every signal of the trace on one linked time axis, pulse trains from their segments,
-    violations marked, opening on the first violation; and the XY path of a gated axis
-    (:mod:`cosim.report.xy`).
-``<out>/report_files/bokeh-<version>.min.js``
-    The plotting library, once for every page (``inline=True`` puts it in each page instead, about
-    1.3 MB a page, for a page that travels alone).
+    One page per run, next to the run's files (:mod:`cosim.report.pages`): its verdict, description,
+    checks with their violations in units (each a link that shows it in the waveform), figures, the
+    waveform, the run's console, the settings set but not modelled, notes, parameters and files.
+    The waveform (:mod:`cosim.report.waveform`) is one figure for every signal, in the order a reader
+    needs (:mod:`cosim.report.rows`), drawn by the page's script from data prepared once, the view
+    kept in the page's address; the XY path of a gated axis (:mod:`cosim.report.xy`) below it.
+``<out>/<run>/waveform/``
+    A long run's finer levels, loaded when the view zooms in (:mod:`cosim.report.levels`).
+``<out>/report_files/``
+    The plotting library (``bokeh-<version>.min.js``) and the waveform's script, once for every page
+    (``inline=True`` puts them in each page instead, about 1.3 MB a page, for a page that travels
+    alone).
 
-Every link is relative. What a page embeds is bounded (see :mod:`cosim.report.rows`); a page says
-what it reduced.
+Every link is relative. What a page embeds is bounded; a page says what it holds reduced.
 """
 
 from __future__ import annotations
 
 import ast
+import hashlib
 import os
 import shutil
 from collections.abc import Iterable, Sequence
@@ -88,67 +91,79 @@ def write_report(results: Iterable[Any], out: Path, *, scenarios: Sequence[_Desc
 def write_site(entries: Sequence[Entry], out: Path, *, inline: bool = False) -> Path:
     """Write the summary ``out/report.html`` and each entry's page; returns the summary's path."""
     out.mkdir(parents=True, exist_ok=True)
-    library = None if inline else _copy_library(out)
+    scripts = None if inline else _shared_scripts(out)
     for entry in entries:
-        write_page(entry, out=out, library=library)
+        write_page(entry, out=out, scripts=scripts)
     path = out / "report.html"
     path.write_text(summary(entries, out), encoding="utf-8")
     return path
 
 
-def _copy_library(out: Path) -> Path:
+def _shared_scripts(out: Path) -> dict[str, Path]:
+    """The plotting library and the waveform's script, once in ``out/report_files/`` for every page."""
     import bokeh
     from bokeh.util.paths import bokehjs_path
 
-    target = out / ASSETS / f"bokeh-{bokeh.__version__}.min.js"
-    if not target.exists():
-        target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(bokehjs_path() / "js" / "bokeh.min.js", target)
-    return target
+    library = out / ASSETS / f"bokeh-{bokeh.__version__}.min.js"
+    if not library.exists():
+        library.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(bokehjs_path() / "js" / "bokeh.min.js", library)
+    code = _our_script()
+    ours = out / ASSETS / f"cosim-waveform-{hashlib.sha256(code.encode()).hexdigest()[:10]}.js"
+    if not ours.exists():
+        ours.write_text(code, encoding="utf-8")
+    return {"bokeh": library, "cosim": ours}
 
 
-def write_page(entry: Entry, *, out: Path, library: Path | None = None) -> Path:
-    """Write one run's page into its folder; ``library``: the shared ``bokeh.min.js`` (None: inlined)."""
-    from bokeh.document import Document
-    from bokeh.embed import components
-    from bokeh.layouts import column, row
-    from bokeh.resources import Resources
-
-    from cosim.export import META, read_trace
+def _our_script() -> str:
     from cosim.report.pulses_js import PULSES_JS
-    from cosim.report.waveform import build, violations_of
+    from cosim.report.waveform import JS
+
+    return PULSES_JS + "\n" + JS
+
+
+def _script_tags(scripts: dict[str, Path] | None, folder: Path) -> str:
+    if scripts is None:
+        from bokeh.resources import Resources
+
+        return Resources(mode="inline", components=["bokeh"]).render_js() + f"<script>{_our_script()}</script>"
+    return "".join(f"<script src='{os.path.relpath(p, folder).replace(os.sep, '/')}'></script>"
+                   for p in scripts.values())
+
+
+def write_page(entry: Entry, *, out: Path, scripts: dict[str, Path] | None = None) -> Path:
+    """Write one run's page into its folder (and a long run's side files into its ``waveform/``);
+    ``scripts``: the shared library and waveform script (None: inlined in the page)."""
+    from cosim.export import META, read_trace
+    from cosim.report.levels import SIDE
+    from cosim.report.waveform import build, figure_html
     from cosim.report.xy import xy_paths
 
     entry.folder.mkdir(parents=True, exist_ok=True)
-    if library is None:
-        scripts = Resources(mode="inline", components=["bokeh"]).render_js()
-    else:
-        scripts = f"<script src='{os.path.relpath(library, entry.folder).replace(os.sep, '/')}'></script>"
-    scripts += f"<script>{PULSES_JS}</script>"  # window.cosimPulses: the rule the waveform uses, for a reader
-    script = div = ""
+    shutil.rmtree(entry.folder / SIDE, ignore_errors=True)  # an older report's side files
+    plot_script, divs, data = "", [], None
     notes: list[str] = []
-    signals: list[str] = []
-    window = None
-    ticks_per_ns = 1.0
+    rows: list[Any] = []
     if (entry.folder / META).is_file():
         trace = read_trace(entry.folder)
         try:
-            marks, notes = violations_of(entry.result.get("checks", []), trace.timebase.resolution_s)
-            wave = build(trace, marks)
+            wave = build(trace, entry.result.get("checks", []), name=entry.name, folder=entry.folder)
             paths = xy_paths(trace)
         finally:
             trace.discard_spill()
-        root = column(wave.layout, row(*paths), sizing_mode="stretch_width") if paths else wave.layout
-        document = Document()
-        document.add_root(root)
-        if wave.on_ready is not None:
-            document.js_on_event("document_ready", wave.on_ready)
-        script, div = stable_ids(components(root), entry.name)
-        notes += wave.notes
-        signals, window = wave.signals, (wave.start, wave.end)
-        ticks_per_ns = float(1 / (trace.timebase.resolution_s * 10**9))
-    text = page(entry, out=out, bokeh=scripts, plot_script=script, plot_div=div, notes=notes, signals=signals,
-                window=window, ticks_per_ns=ticks_per_ns)
+        script, div = figure_html()
+        texts = [script, div]
+        if paths:  # the XY paths of gated axes: a document of their own
+            from bokeh.embed import components
+
+            more, found = components(paths)
+            texts += [more, *found]
+        script, div, *rest = stable_ids(texts, entry.name)
+        plot_script = script + (rest[0] if rest else "")
+        divs = [div, *rest[1:]]
+        notes, rows, data = wave.notes, wave.rows, wave.data
+    text = page(entry, out=out, scripts=_script_tags(scripts, entry.folder), plot_script=plot_script,
+                plot_divs=divs, notes=notes, wave_data=data, rows=rows)
     path = entry.folder / PAGE
     path.write_text(text, encoding="utf-8")
     return path

@@ -1,4 +1,4 @@
-"""The browser's copy of the pulse rule, and the callback that draws pulses when few are visible.
+"""The browser's copy of the pulse rule (the page's waveform script draws pulses with it when few are visible).
 
 :data:`PULSES_JS` defines ``cosimPulses(seg, start, end, cap)``: the pulses of the segments ``seg``
 (``{t0, duration, count, dir, width}``, arrays of exact integers in ticks, in order of ``t0``) inside
@@ -8,10 +8,6 @@ still high counts), placed by the rule of :mod:`cosim.pulses` (pulse ``k`` of a 
 division is corrected after the float division, so the instants are exact while the products stay
 below 2**53 (a segment's ``duration * count``). The browser test runs it against
 :func:`cosim.pulses.materialize_pulses`.
-
-:data:`SWITCH_JS` is the body of the ``CustomJS`` that runs when the time range changes (and once
-when the page is ready): for each pulse train, the visible pulses when there are at most ``cap``,
-else its rate.
 """
 
 from __future__ import annotations
@@ -40,29 +36,5 @@ function cosimPulses(seg, start, end, cap) {
     }
   }
   return {t: t, dir: dir, width: w};
-}
-"""
-
-SWITCH_JS = PULSES_JS + """
-for (const tr of trains) {
-  const seg = tr.segments.data;
-  const found = tr.expandable ? cosimPulses(seg, xr.start, xr.end, cap) : null;
-  if (found === null) {
-    tr.pulses.data = {left: [], right: [], colour: []};
-    tr.pulse_renderer.visible = false;
-    tr.rate_renderer.visible = true;
-    tr.y.setv({start: tr.rate_low, end: tr.rate_high});
-    tr.axis.axis_label = "pulses/s";
-  } else {
-    tr.pulses.data = {
-      left: found.t,
-      right: found.t.map((v, i) => v + found.width[i]),
-      colour: found.dir.map((d) => (d == 1 ? up : down)),
-    };
-    tr.pulse_renderer.visible = true;
-    tr.rate_renderer.visible = false;
-    tr.y.setv({start: -0.2, end: 1.3});
-    tr.axis.axis_label = "pulses";
-  }
 }
 """
