@@ -4,9 +4,13 @@ What a user pays before the first simulated instant matters (every example run i
 importing cosim and what the run needs, reading and building the machine, loading its FMUs, the
 1 ms run itself, its checks and writing the results folder (``result.json``, ``trace.vcd``, the
 Parquet tables). Each case runs in a new interpreter, ``--repeat`` times (min / median / max), after
-one untimed run that builds missing FMUs and fills the per-user caches (the parsed grammars): the
-figure is what every later run costs. The CPU time is the child's user + system time
-(``resource.getrusage(RUSAGE_CHILDREN)``), which other work on a shared machine disturbs little.
+one untimed run that builds missing FMUs and fills the per-user caches (the built grammars, Python's
+bytecode): the figure is what every later run costs. Python caches the bytecode of the modules
+as it does for an installed cosim (in a folder of the temporary directory, ``PYTHONPYCACHEPREFIX``,
+so that the checkout is not written to), also where the environment says ``PYTHONDONTWRITEBYTECODE``;
+``--no-bytecode-cache`` measures a start that compiles every module from source. The CPU time is
+the child's user + system time (``resource.getrusage(RUSAGE_CHILDREN)``), which other work on a
+shared machine disturbs little.
 
 Two ways in, for each example machine:
 
@@ -20,7 +24,7 @@ where a loop is designed: the module is loaded on first use, so a run that desig
 Run::
 
     .venv/bin/python bench/bench_startup.py [--repeat 3] [--only trio|pokeys|pmac] [--lazy-control]
-                                            [--way cli|runner] [--imports]
+                                            [--way cli|runner] [--imports] [--no-bytecode-cache]
 
 ``--imports`` lists, per case, the packages (cosim by module) whose imports took longest (``-X importtime``, wall).
 """
@@ -120,9 +124,19 @@ def heaviest_imports(case: Case, *, lazy_control: bool, top: int = 10) -> list[t
     return sorted(package.items(), key=lambda kv: -kv[1])[:top]
 
 
+#: Set by --no-bytecode-cache: every start compiles cosim's modules from source.
+BYTECODE = {"cache": True}
+
+
 def _env() -> dict[str, str]:
+    """The child's environment: this checkout first on the path; bytecode cached as an installed cosim has it."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    if BYTECODE["cache"]:
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+        env["PYTHONPYCACHEPREFIX"] = str(Path(tempfile.gettempdir()) / f"cosim-bench-pycache-{os.getuid()}")
+    else:
+        env["PYTHONDONTWRITEBYTECODE"] = "1"
     return env
 
 
@@ -140,7 +154,10 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--lazy-control", action="store_true",
                         help="make `import control` lazy in the child (python-control loaded on first use)")
     parser.add_argument("--imports", action="store_true", help="also list the heaviest imports of each case")
+    parser.add_argument("--no-bytecode-cache", action="store_true",
+                        help="compile every module from source at each start (PYTHONDONTWRITEBYTECODE)")
     args = parser.parse_args(argv)
+    BYTECODE["cache"] = not args.no_bytecode_cache
     print(f"machine: {machine_load()}")
     print(f"start-up of a machine file run for 1 ms, fresh interpreter, process CPU s, {args.repeat} runs "
           f"(min / median / max){'; python-control lazy' if args.lazy_control else ''}")

@@ -120,8 +120,9 @@ def _rows(trace: Trace, table: str) -> Iterator[dict[str, Any]]:
 
 
 #: Column types of each table (the ``signal`` column is text).
-_TYPES = {"edges": {"t": np.int64, "value": np.int64}, "values": {"t": np.int64, "value": np.float64},
-          "segments": {c: np.int64 for c in _COLUMNS["segments"][1:]}, "pulses": {"t": np.int64, "dir": np.int64}}
+_TYPES: dict[str, dict[str, type[np.generic]]] = {
+    "edges": {"t": np.int64, "value": np.int64}, "values": {"t": np.int64, "value": np.float64},
+    "segments": {c: np.int64 for c in _COLUMNS["segments"][1:]}, "pulses": {"t": np.int64, "dir": np.int64}}
 
 @dataclass
 class _Block:
