@@ -24,7 +24,7 @@ from operator import methodcaller
 from typing import Any
 
 import simpy
-from simpy.core import EmptySchedule, StopSimulation
+from simpy.core import EmptySchedule, Infinity, StopSimulation
 from simpy.events import Event, EventPriority
 
 from cosim import validate
@@ -88,12 +88,15 @@ class _Environment(simpy.Environment):
             heappop(queue)
             dropped += 1
         if dropped:
-            self.cancelled = self._cancelled - dropped
+            self._cancelled -= dropped
+            if not self._cancelled:
+                self._update()
 
     def peek(self) -> float:
         if self._cancelled:
             self.drop_cancelled()
-        return super().peek()
+        queue = self._queue
+        return queue[0][0] if queue else Infinity
 
     def step(self) -> None:
         self._steps += 1
@@ -290,7 +293,9 @@ class Simulation:
         event.callbacks = []
         if isinstance(event, _Call):
             event.call = _nothing  # the callback's closure is freed now, not when the entry leaves the queue
-        self.env.cancelled = self.env.cancelled + 1
+        env = self.env
+        env._cancelled += 1
+        env._special = True
 
     def due_by(self, t: int) -> bool:
         """Is any event queued at or before tick ``t``? (SimPy's public ``peek``.)
@@ -319,10 +324,17 @@ class Simulation:
             True if the clock now reads ``t``.
         """
         env = self.env
-        if env.look_aheads or t < env.now or self.due_by(t):
+        if env.look_aheads or t < env._now:
+            return False
+        if env._cancelled:
+            env.drop_cancelled()
+        queue = self._queue
+        if queue and queue[0][0] <= t:  # due_by(t)
             return False
         env._now = int(t)  # SimPy has no public setter; nothing is due before t, so no event is skipped
-        env.count_step(t)
+        env._skips += 1  # env.count_step(t), inline
+        if env._on_progress is not None and not (env._steps + env._skips) & 0xFFF:
+            env._on_progress(int(t))
         return True
 
     def process(self, generator: Generator[Event, Any, Any]) -> simpy.Process:
