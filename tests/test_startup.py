@@ -138,3 +138,21 @@ def test_a_cached_parser_reads_as_a_freshly_built_one(
     assert got == expected
     if options.get("propagate_positions"):
         assert _nodes(got) == _nodes(expected) and len(_nodes(got)) > 5
+
+
+def test_a_trace_that_spills_to_disk_and_is_read_back_does_not_load_pandas() -> None:
+    code = ("import sys\n"
+            "from cosim.trace import Trace\n"
+            "trace = Trace(spill_rows=3)\n"
+            "trace.declare('dev.n', 'int')\n"
+            "trace.declare('dev.step', 'pulse')\n"
+            "for k in range(10):\n"
+            "    trace.record('dev.n', 10 * k, k)\n"
+            "    trace.record_segment('dev.step', 100 * k, 100, 3, k % 2)\n"
+            "t, v = trace.edges('dev.n')\n"
+            "p, d = trace.pulses('dev.step')\n"
+            "assert trace.spilled_rows() > 0\n"
+            "print(t.tolist()[-2:], v.tolist()[-2:], p.tolist()[:4], d.tolist()[:4], 'pandas' in sys.modules)\n"
+            "trace.discard_spill()\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[80, 90] [8.0, 9.0] [0, 33, 66, 100] [0, 0, 0, 1] False"
