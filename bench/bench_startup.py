@@ -20,7 +20,8 @@ Two ways in, for each example machine:
 
 Goals (issue 29): a Trio or PoKeys machine <= 0.5 s, a PMAC one <= 1.0 s. ``--lazy-control`` makes
 ``import control`` (python-control) lazy in the child, as if the PMAC servo modules imported it only
-where a loop is designed: the module is loaded on first use, so a run that designs a loop still gets it.
+where a loop is designed: the module is loaded on first use, so a run that designs a loop still gets it
+(``--imports`` then shows scipy and matplotlib).
 Run::
 
     .venv/bin/python bench/bench_startup.py [--repeat 3] [--only trio|pokeys|pmac] [--lazy-control]
@@ -56,14 +57,17 @@ CASES = (
 #: Verdicts a 1 ms run may end with (most checks have not seen anything yet): anything but a crash.
 ACCEPTED_STATUS = (0, 1, 3, 4)
 
-#: Makes ``import control`` lazy (importlib's LazyLoader): loaded on first attribute use.
+#: Makes ``import control`` lazy: a stand-in module that imports python-control on its first attribute use.
+#: (importlib's LazyLoader does not do for this: ``import control`` itself reads ``__spec__`` and loads it.)
 LAZY_CONTROL = """
-import importlib.util, sys
-_spec = importlib.util.find_spec("control")
-_spec.loader = importlib.util.LazyLoader(_spec.loader)
-_module = importlib.util.module_from_spec(_spec)
-sys.modules["control"] = _module
-_spec.loader.exec_module(_module)
+import importlib, sys, types
+class _LazyControl(types.ModuleType):
+    def __getattr__(self, name):
+        sys.modules.pop("control", None)
+        real = importlib.import_module("control")
+        self.__dict__.update(real.__dict__)
+        return getattr(real, name)
+sys.modules["control"] = _LazyControl("control")
 """
 CLI = "import sys\nfrom cosim.cli import main\nsys.argv[0] = 'cosim'\nsys.exit(main(sys.argv[1:]))\n"
 RUNNER = """import sys
