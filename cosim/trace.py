@@ -49,7 +49,7 @@ import numpy.typing as npt
 from cosim.errors import ConfigurationError
 from cosim.pulses import materialize_pulses
 from cosim.timebase import TimeBase
-from cosim.tracestore import SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
+from cosim.tracestore import DTYPES, SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
 
 Kind = Literal["bit", "int", "real", "pulse"]
 KINDS: tuple[str, ...] = ("bit", "int", "real", "pulse")
@@ -527,7 +527,12 @@ class Trace:
         if cached is not None and cached[0] == version:
             self._pulse_cache[name] = cached  # read last: forgotten last
             return cached[1], cached[2]
-        if train.segments.in_order() and train.singles.in_order():
+        segments = train.segments
+        if not segments.spilled and not len(train.singles) and segments.in_order():  # in one piece, no merge
+            t0, duration, count, direction = (np.frombuffer(a, dtype=DTYPES[a.typecode]) for a in segments.arrays[:4])
+            t = materialize_pulses(t0, duration, count)
+            d = np.repeat(direction, count)
+        elif train.segments.in_order() and train.singles.in_order():
             parts = list(self._ordered_pulses(train))
             t = np.concatenate([p[0] for p in parts]) if parts else np.empty(0, np.int64)
             d = np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.int8)

@@ -199,6 +199,7 @@ def _long_train(chunk_pulses: int) -> Trace:
 
 
 def test_a_train_in_memory_is_materialised_once_for_several_readers(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cosim.trace
     import cosim.tracestore
 
     calls: list[int] = []
@@ -209,6 +210,7 @@ def test_a_train_in_memory_is_materialised_once_for_several_readers(monkeypatch:
         return original(*args, **kwargs)
 
     monkeypatch.setattr(cosim.tracestore, "materialize_pulses", counting)
+    monkeypatch.setattr(cosim.trace, "materialize_pulses", counting)
     trace = _long_train(chunk_pulses=10)
     first = [(t.tolist(), d.tolist()) for t, d in trace.pulse_chunks("dev.step")]
     made = len(calls)
