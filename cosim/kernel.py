@@ -44,21 +44,22 @@ class _Environment(simpy.Environment):
     Its :meth:`step` is SimPy's own (the same order, the same handling of a stopped run and of a
     failed event) with the kernel's additions in front: cancelled events at the queue's head are
     dropped, progress is reported, look-aheads are called. Those run only while one of them has
-    something to do (one flag, :attr:`_special`), so that an event costs about what a bare SimPy
-    event does. The clock is always an ``int``: every entry point makes its tick one.
+    something to do (a flag for cancelled events and progress, and the look-aheads' list), so that
+    an event costs about what a bare SimPy event does. The clock is always an ``int``: every entry
+    point makes its tick one.
     """
 
     def __init__(self) -> None:
         super().__init__(initial_time=0)
-        self.look_aheads: list[LookAhead] = _LookAheads(self)
+        self.look_aheads: list[LookAhead] = []
         self._on_progress: Callable[[int], None] | None = None
         self._cancelled = 0
-        self._special = False  # cancelled events queued, look-aheads registered or progress wanted
+        self._special = False  # cancelled events queued or progress wanted
         self._steps = 0  # kernel events run
         self._skips = 0  # passes fast paths ran without an event (Simulation.skip_to, the master's sampling)
 
     def _update(self) -> None:
-        self._special = bool(self._cancelled or self.look_aheads or self._on_progress is not None)
+        self._special = bool(self._cancelled or self._on_progress is not None)
 
     @property
     def on_progress(self) -> Callable[[int], None] | None:
@@ -100,7 +101,7 @@ class _Environment(simpy.Environment):
 
     def step(self) -> None:
         self._steps += 1
-        if self._special:
+        if self._special or self.look_aheads:
             self._before_step()
         # SimPy's Environment.step (simpy 4.1), inline:
         try:
@@ -139,18 +140,6 @@ class _Environment(simpy.Environment):
         self._skips += 1
         if self._on_progress is not None and not (self._steps + self._skips) & 0xFFF:
             self._on_progress(int(now))
-
-
-class _LookAheads(list[LookAhead]):
-    """The environment's look-aheads: a list that tells the environment when one is added."""
-
-    def __init__(self, env: _Environment) -> None:
-        super().__init__()
-        self._env = env
-
-    def append(self, look_ahead: LookAhead) -> None:
-        super().append(look_ahead)
-        self._env._update()
 
 
 class At(Event):
