@@ -34,7 +34,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from clock import Lap, Series, machine_load, measure, spread
+from clock import Lap, Series, figure_line, machine_load, measure, spread
 
 from cosim.checks import DirectionSetup, MinPulseSpacing, PulsesPerWindow
 from cosim.controllers.pokeys import AXES, SLOT_NS, EngineConfig, PulseEngine, uniform_axes
@@ -49,6 +49,7 @@ from cosim.testing.pokeys_naive import naive_pulse_engine
 FAR = (60_000, -45_000, 30_000)  # x at 25 kHz, y and z proportionally slower
 PRESET = "nema17_17hs16_2004s1"  # the bundled pokeys_job scenario's plants
 IDEAL_DRIVER = {"phase_inductance": 0.0}  # ideal current source: no L/R current loop
+JOB_GOAL_RTF = 50  # issue 29: the whole job at 50x real time or faster
 
 
 def moves_for(seconds: int, config: EngineConfig) -> list[Move]:
@@ -212,6 +213,8 @@ def main() -> None:
         print(line("checks over every pulse of that run", checks))
         total = Series(job_total)
         print(line("THE JOB: planning + run + FMUs + checks", total, simulated_s))
+        print(figure_line("pokeys", "the job (planning, engine + host + 3 Stepper FMUs, checks) [x real time]",
+                          [simulated_s / c for c in total.cpu()], goal=JOB_GOAL_RTF))
     if not args.no_naive:
         print(line("naive model, one event per pulse", naive, simulated_s))
         ratio = [n / e for n, e in zip(naive.cpu(), engine.cpu(), strict=True)]

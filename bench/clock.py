@@ -75,3 +75,27 @@ def machine_load() -> str:
     """The 1-minute load average and the number of CPUs (how busy the machine was)."""
     one, five, _ = os.getloadavg()
     return f"load average {one:.2f} (1 min), {five:.2f} (5 min) on {os.cpu_count()} CPUs"
+
+
+#: Prefix of the line a bench prints for each acceptance figure (read by ``bench/bench_families.py``).
+FIGURE_PREFIX = "FIGURE "
+
+
+def figure_line(family: str, figure: str, values: Sequence[float], *, goal: float,
+                higher_is_better: bool = True) -> str:
+    """One line ``FIGURE {json}`` for an acceptance figure: family, figure, values (min/median/max), goal, met.
+
+    ``met`` compares the median with the goal (at least ``goal`` when higher is better, at most otherwise);
+    ``met_by_worst`` the worst of the values. ``bench/bench_families.py`` collects these lines from every bench.
+    """
+    import json
+
+    ordered = sorted(values)
+    median, worst = statistics.median(ordered), ordered[0] if higher_is_better else ordered[-1]
+
+    def meets(value: float) -> bool:
+        return value >= goal if higher_is_better else value <= goal
+
+    return FIGURE_PREFIX + json.dumps({
+        "family": family, "figure": figure, "min": ordered[0], "median": median, "max": ordered[-1],
+        "goal": goal, "higher_is_better": higher_is_better, "met": meets(median), "met_by_worst": meets(worst)})

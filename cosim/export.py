@@ -27,22 +27,28 @@ Tables:
 
 All ``t`` columns are integer ticks. Rows come signal by signal in declaration order, each
 signal's in recording order.
+
+Parquet is written with pyarrow alone; pandas is imported only to write or read CSV and to read
+tables back (a run that writes Parquet does not load it).
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import pandas as pd
+import numpy.typing as npt
 
 from cosim.errors import ConfigurationError
 from cosim.export_vcd import write_waveforms
-from cosim.export_wide import write_wide_csv
 from cosim.trace import Trace
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 _TABLES = ("edges", "values", "segments", "pulses")
 _COLUMNS = {"edges": ("signal", "t", "value"), "values": ("signal", "t", "value"),
@@ -81,6 +87,8 @@ def write_trace(trace: Trace, folder: str | Path, *, formats: tuple[str, ...] = 
         else:
             write_tables(trace, folder, fmt)
             if fmt == "csv":
+                from cosim.export_wide import write_wide_csv
+
                 write_wide_csv(trace, folder / "trace_wide.csv")
     return folder
 
@@ -111,34 +119,67 @@ def _rows(trace: Trace, table: str) -> Iterator[dict[str, Any]]:
                 yield {"signal": name, "t": t, "value": v if info.kind == "real" else v.astype(np.int64)}
 
 
-def _blocks(trace: Trace, table: str) -> Iterator[pd.DataFrame]:
-    """The rows of one table in frames of about ``_BLOCK_ROWS`` rows (at least one frame, maybe empty)."""
-    parts: list[pd.DataFrame] = []
+#: Column types of each table (the ``signal`` column is text).
+_TYPES: dict[str, dict[str, type[np.generic]]] = {
+    "edges": {"t": np.int64, "value": np.int64}, "values": {"t": np.int64, "value": np.float64},
+    "segments": {c: np.int64 for c in _COLUMNS["segments"][1:]}, "pulses": {"t": np.int64, "dir": np.int64}}
+
+@dataclass
+class _Block:
+    """Rows of one table: the ``signal`` column as runs (name, rows), the others as typed arrays."""
+
+    runs: list[tuple[str, int]]
+    columns: dict[str, npt.NDArray[Any]]
+
+    def signals(self) -> npt.NDArray[Any]:
+        """The ``signal`` column as an array of Python strings."""
+        names = np.array([name for name, _ in self.runs] or [""], dtype=object)
+        return np.repeat(names, [n for _, n in self.runs] or [0])
+
+
+def _blocks(trace: Trace, table: str) -> Iterator[_Block]:
+    """The rows of one table in blocks of about ``_BLOCK_ROWS`` rows (at least one block, maybe empty)."""
+    parts: list[dict[str, Any]] = []
     size, emitted = 0, False
     for columns in _rows(trace, table):
         n = len(columns["t0" if table == "segments" else "t"])
         if not n:
             continue
-        parts.append(pd.DataFrame({k: np.full(n, v, dtype=object) if k == "signal" else v
-                                   for k, v in columns.items()}))
+        parts.append(columns)
         size += n
         if size >= _BLOCK_ROWS:
-            yield _typed(pd.concat(parts, ignore_index=True), table)
+            yield _joined(parts, table)
             parts, size, emitted = [], 0, True
     if parts or not emitted:
-        yield _typed(pd.concat(parts, ignore_index=True) if parts else
-                     pd.DataFrame({c: [] for c in _COLUMNS[table]}), table)
+        yield _joined(parts, table)
 
 
-def _typed(frame: pd.DataFrame, table: str) -> pd.DataFrame:
-    for column in frame.columns:
-        if column == "signal":
-            frame[column] = frame[column].astype(str)
-        elif column == "value" and table == "values":
-            frame[column] = frame[column].astype(np.float64)
-        else:
-            frame[column] = frame[column].astype(np.int64)
-    return frame
+def _joined(parts: list[dict[str, Any]], table: str) -> _Block:
+    """One block of ``parts``, each column in its table's type."""
+    key = "t0" if table == "segments" else "t"
+    columns = {}
+    for column, dtype in _TYPES[table].items():
+        pieces = [part[column] for part in parts if column in part]
+        columns[column] = np.concatenate(pieces).astype(dtype) if pieces else np.empty(0, dtype=dtype)
+    return _Block([(part["signal"], len(part[key])) for part in parts], columns)
+
+
+def _arrow_table(block: _Block, schema: Any) -> Any:
+    """``block`` as a pyarrow table of ``schema``, built from its buffers (``pa.array`` would import pandas)."""
+    import pyarrow as pa
+
+    names = [name.encode() for name, _ in block.runs]
+    counts = np.array([n for _, n in block.runs], dtype=np.int64)
+    lengths = np.repeat(np.array([len(b) for b in names], dtype=np.int64), counts)
+    offsets = np.zeros(len(lengths) + 1, dtype=np.int64)
+    np.cumsum(lengths, out=offsets[1:])
+    text = b"".join(b * int(n) for b, n in zip(names, counts, strict=True))
+    arrays = {"signal": pa.Array.from_buffers(pa.large_string(), len(lengths),
+                                              [None, pa.py_buffer(offsets), pa.py_buffer(text)])}
+    for column, values in block.columns.items():
+        arrays[column] = pa.Array.from_buffers(schema.field(column).type, len(values),
+                                               [None, pa.py_buffer(np.ascontiguousarray(values))])
+    return pa.table(arrays, schema=schema)
 
 
 def write_tables(trace: Trace, folder: str | Path, fmt: str = "parquet") -> list[Path]:
@@ -151,19 +192,17 @@ def write_tables(trace: Trace, folder: str | Path, fmt: str = "parquet") -> list
             import pyarrow as pa
             import pyarrow.parquet as pq
 
-            writer = None
-            try:
-                for frame in _blocks(trace, table):
-                    batch = pa.Table.from_pandas(frame, preserve_index=False)
-                    if writer is None:
-                        writer = pq.ParquetWriter(path, batch.schema)
-                    writer.write_table(batch)
-            finally:
-                if writer is not None:
-                    writer.close()
+            schema = pa.schema([(c, pa.large_string() if c == "signal" else pa.from_numpy_dtype(_TYPES[table][c]))
+                                for c in _COLUMNS[table]])
+            with pq.ParquetWriter(path, schema) as writer:
+                for block in _blocks(trace, table):
+                    writer.write_table(_arrow_table(block, schema))
         else:
+            import pandas as pd
+
             with path.open("w", newline="") as stream:
-                for k, frame in enumerate(_blocks(trace, table)):
+                for k, block in enumerate(_blocks(trace, table)):
+                    frame = pd.DataFrame({"signal": block.signals(), **block.columns}, columns=_COLUMNS[table])
                     frame.to_csv(stream, index=False, header=k == 0)
         written.append(path)
     return written
@@ -171,6 +210,8 @@ def write_tables(trace: Trace, folder: str | Path, fmt: str = "parquet") -> list
 
 def read_tables(trace: Trace, folder: str | Path) -> None:
     """Fill a freshly declared ``trace`` from the tables in ``folder`` (Parquet preferred), a block at a time."""
+    import pandas as pd
+
     folder = Path(folder)
     fmt = "parquet" if (folder / "edges.parquet").exists() else "csv"
 

@@ -19,7 +19,6 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from xml.sax.saxutils import quoteattr
 
 from cosim.errors import ConfigurationError
 
@@ -72,6 +71,13 @@ _FLOATS = ("Float32", "Float64")
 _CAUSALITIES = {"parameter": "CA_PARAMETER", "calculatedParameter": "CA_CALCULATED_PARAMETER",
                 "input": "CA_INPUT", "output": "CA_OUTPUT", "local": "CA_LOCAL"}
 LOG_CATEGORIES = ("logStatusWarning", "logStatusError", "logEvents")
+
+
+def quoteattr(text: str) -> str:
+    """``xml.sax.saxutils.quoteattr``, imported when a description is written (it pulls in urllib, http, ssl)."""
+    from xml.sax.saxutils import quoteattr as quote
+
+    return quote(text)
 
 
 @dataclass(frozen=True)

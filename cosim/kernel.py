@@ -18,12 +18,14 @@ usually turns out not to be needed keeps the controllers' shortcut working).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator
-from heapq import heappop
+from collections.abc import Callable, Generator, Iterator
+from heapq import heappop, heappush
+from operator import methodcaller
 from typing import Any
 
 import simpy
-from simpy.events import Event
+from simpy.core import EmptySchedule, Infinity, StopSimulation
+from simpy.events import Event, EventPriority
 
 from cosim import validate
 from cosim.errors import ConfigurationError
@@ -32,60 +34,149 @@ from cosim.timebase import Priority, TimeBase
 from cosim.trace import Trace
 
 LookAhead = Callable[[int], None]
+#: A queue entry of SimPy's: (tick, priority, insertion number, event).
+Entry = tuple[int, int, int, Event]
 
 
 class _Environment(simpy.Environment):
-    """A SimPy environment that calls look-aheads before its clock moves."""
+    """A SimPy environment that calls look-aheads before its clock moves.
+
+    Its :meth:`step` is SimPy's own (the same order, the same handling of a stopped run and of a
+    failed event) with the kernel's additions in front: cancelled events at the queue's head are
+    dropped, progress is reported, look-aheads are called. Those run only while one of them has
+    something to do (a flag for cancelled events and progress, and the look-aheads' list), so that
+    an event costs about what a bare SimPy event does. The clock is always an ``int``: every entry
+    point makes its tick one.
+    """
 
     def __init__(self) -> None:
         super().__init__(initial_time=0)
         self.look_aheads: list[LookAhead] = []
-        self.on_progress: Callable[[int], None] | None = None
+        self._on_progress: Callable[[int], None] | None = None
+        self._cancelled = 0
+        self._special = False  # cancelled events queued or progress wanted
         self._steps = 0  # kernel events run
-        self._work = 0  # kernel events and the passes fast paths run without one (for progress)
-        self.cancelled = 0  # cancelled events still in the queue (dropped when they reach its head)
+        self._skips = 0  # passes fast paths ran without an event (Simulation.skip_to, the master's sampling)
+
+    def _update(self) -> None:
+        self._special = bool(self._cancelled or self._on_progress is not None)
+
+    @property
+    def on_progress(self) -> Callable[[int], None] | None:
+        """Called with the clock every 4096 steps of work (events and fast-path passes), if set."""
+        return self._on_progress
+
+    @on_progress.setter
+    def on_progress(self, callback: Callable[[int], None] | None) -> None:
+        self._on_progress = callback
+        self._update()
+
+    @property
+    def cancelled(self) -> int:
+        """Cancelled events still in the queue (dropped when they reach its head)."""
+        return self._cancelled
+
+    @cancelled.setter
+    def cancelled(self, count: int) -> None:
+        self._cancelled = count
+        self._update()
 
     def drop_cancelled(self) -> None:
         """Remove cancelled events from the head of the queue."""
         queue = self._queue
+        dropped = 0
         while queue and getattr(queue[0][3], "cancelled", False):
             heappop(queue)
-            self.cancelled -= 1
+            dropped += 1
+        if dropped:
+            self._cancelled -= dropped
+            if not self._cancelled:
+                self._update()
 
     def peek(self) -> float:
-        if self.cancelled:
+        if self._cancelled:
             self.drop_cancelled()
-        return super().peek()
+        queue = self._queue
+        return queue[0][0] if queue else Infinity
 
     def step(self) -> None:
-        if self.cancelled:
-            self.drop_cancelled()
         self._steps += 1
-        self.count_step(self._now)
-        if self.look_aheads:
-            t_next = self.peek()
-            if self._now < t_next < float("inf"):
+        if self._special or self.look_aheads:
+            self._before_step()
+        # SimPy's Environment.step (simpy 4.1), inline:
+        try:
+            self._now, _, _, event = heappop(self._queue)
+        except IndexError:
+            raise EmptySchedule from None
+        callbacks, event.callbacks = event.callbacks, None  # type: ignore[assignment]
+        try:
+            for callback in callbacks:
+                callback(event)
+        except StopSimulation:
+            # As SimPy does: the callbacks not run yet run when the simulation resumes.
+            event.callbacks = callbacks[callbacks.index(callback) + 1:]
+            self.schedule(event, EventPriority(-1))
+            raise
+        if not event._ok and not hasattr(event, "_defused"):
+            exc = type(event._value)(*event._value.args)
+            exc.__cause__ = event._value
+            raise exc
+
+    def _before_step(self) -> None:
+        """Drop cancelled events at the head, report progress, call the look-aheads (before the clock moves)."""
+        if self._cancelled:
+            self.drop_cancelled()
+        if self._on_progress is not None and not (self._steps + self._skips) & 0xFFF:
+            self._on_progress(int(self._now))
+        queue = self._queue
+        if self.look_aheads and queue:
+            t_next = queue[0][0]
+            if self._now < t_next:
                 for look_ahead in self.look_aheads:
                     look_ahead(int(t_next))
-        super().step()
 
     def count_step(self, now: float) -> None:
-        """Count one step of work (a kernel event, or a pass a fast path ran without one); report progress."""
-        self._work += 1
-        if self.on_progress is not None and not self._work & 0xFFF:
-            self.on_progress(int(now))
+        """Count one step of work a fast path ran without an event; report progress."""
+        self._skips += 1
+        if self._on_progress is not None and not (self._steps + self._skips) & 0xFFF:
+            self._on_progress(int(now))
 
 
 class At(Event):
-    """An event that fires at an absolute tick with a named priority."""
+    """An event that fires at an absolute tick with a named priority.
+
+    Scheduled as SimPy's ``env.schedule(event, priority, t - env.now)`` does (the same queue entry),
+    without its call.
+    """
 
     cancelled = False  # set by Simulation.cancel
+    _ok = True  # triggered when made: every At succeeds
 
     def __init__(self, env: simpy.Environment, t: int, priority: int, value: Any = None) -> None:
-        super().__init__(env)
-        self._ok = True
+        # Event.__init__, inline (as SimPy's own Timeout does); the event is triggered already (_ok).
+        self.env = env
+        self.callbacks: list[Callable[[Event], None]] = []
         self._value = value
-        env.schedule(self, priority, t - env.now)  # type: ignore[arg-type]
+        queue: list[Entry] = env._queue  # type: ignore[assignment]
+        heappush(queue, (t, priority, next(env._eid), self))
+
+
+class _Call(At):
+    """An event of :meth:`Simulation.call_at`: its one callback calls ``call()``."""
+
+    _value = None
+    call: Callable[[], None]
+
+
+#: The callback of a ``_Call`` event: ``event.call()``, in C (no Python frame between SimPy and the callback).
+_call = methodcaller("call")
+
+
+def _nothing() -> None:
+    return None
+
+
+_new = object.__new__
 
 
 class Simulation:
@@ -120,6 +211,9 @@ class Simulation:
         self.seed = integer(seed, "seed", low=0, high=2**63 - 1)
         self.timebase = timebase or TimeBase()
         self.env = _Environment()
+        # SimPy's queue and its entry counter (made once, with the environment), for the scheduling methods
+        self._queue: list[Entry] = self.env._queue  # type: ignore[assignment]
+        self._eid: Iterator[int] = self.env._eid
         self.trace = Trace(self.timebase)
         self.notes = Notes()  # what the run's result lists besides checks: see cosim.notes
         self.rng = np.random.default_rng(seed)
@@ -128,8 +222,8 @@ class Simulation:
 
     @property
     def now(self) -> int:
-        """Current simulation time in ticks."""
-        return int(self.env.now)
+        """Current simulation time in ticks (an ``int``: every way to schedule or move the clock makes it one)."""
+        return self.env._now  # type: ignore[return-value]
 
     def ticks(self, value: int | float | str, unit: str | None = None, *, name: str = "time") -> int:
         """Shorthand for :meth:`TimeBase.ticks`."""
@@ -137,21 +231,41 @@ class Simulation:
 
     def at(self, t: int, priority: int = Priority.NORMAL, value: Any = None) -> Event:
         """An event at absolute tick ``t`` (not in the past)."""
-        self.timebase.check_ticks(t, name="t")
-        if t < self.now:
-            raise ConfigurationError(f"t = {t} ticks is in the past (now = {self.now})")
-        return At(self.env, t, priority, value)
+        env = self.env
+        if type(t) is not int or t < env._now:  # the common case costs one test
+            t = self._checked_t(t)
+        event = _new(At)  # At(env, t, priority, value), without the call
+        event.env, event.callbacks, event._value = env, [], value
+        heappush(self._queue, (t, priority, next(self._eid), event))
+        return event
 
     def after(self, delay: int, priority: int = Priority.NORMAL, value: Any = None) -> Event:
         """An event ``delay`` ticks from now."""
-        self.timebase.check_ticks(delay, name="delay")
-        return At(self.env, self.now + delay, priority, value)
+        if type(delay) is not int or delay < 0:
+            delay = self.timebase.check_ticks(delay, name="delay")
+        env = self.env
+        t: int = env._now + delay  # type: ignore[assignment]  # (the clock is an int)
+        event = _new(At)
+        event.env, event.callbacks, event._value = env, [], value
+        heappush(self._queue, (t, priority, next(self._eid), event))
+        return event
 
     def call_at(self, t: int, priority: int, callback: Callable[[], None]) -> Event:
         """Run ``callback()`` at tick ``t`` with ``priority`` (no process needed); :meth:`cancel` takes it back."""
-        event = self.at(t, priority)
-        event.callbacks.append(lambda _event: callback())
+        env = self.env
+        if type(t) is not int or t < env._now:
+            t = self._checked_t(t)
+        event = _new(_Call)
+        event.env, event.callbacks, event.call = env, [_call], callback
+        heappush(self._queue, (t, priority, next(self._eid), event))
         return event
+
+    def _checked_t(self, t: object) -> int:
+        """``t`` as an int tick, or ConfigurationError: not an integer, negative, or in the past."""
+        ticks = self.timebase.check_ticks(t, name="t")
+        if ticks < self.now:
+            raise ConfigurationError(f"t = {t} ticks is in the past (now = {self.now})")
+        return ticks
 
     def cancel(self, event: Event) -> None:
         """Take back an event of :meth:`call_at` that has not fired: its callback never runs.
@@ -166,7 +280,11 @@ class Simulation:
             return
         event.cancelled = True
         event.callbacks = []
-        self.env.cancelled += 1
+        if isinstance(event, _Call):
+            event.call = _nothing  # the callback's closure is freed now, not when the entry leaves the queue
+        env = self.env
+        env._cancelled += 1
+        env._special = True
 
     def due_by(self, t: int) -> bool:
         """Is any event queued at or before tick ``t``? (SimPy's public ``peek``.)
@@ -195,10 +313,17 @@ class Simulation:
             True if the clock now reads ``t``.
         """
         env = self.env
-        if env.look_aheads or t < env.now or self.due_by(t):
+        if env.look_aheads or t < env._now:
             return False
-        env._now = t  # SimPy has no public setter; nothing is due before t, so no event is skipped
-        env.count_step(t)
+        if env._cancelled:
+            env.drop_cancelled()
+        queue = self._queue
+        if queue and queue[0][0] <= t:  # due_by(t)
+            return False
+        env._now = int(t)  # SimPy has no public setter; nothing is due before t, so no event is skipped
+        env._skips += 1  # env.count_step(t), inline
+        if env._on_progress is not None and not (env._steps + env._skips) & 0xFFF:
+            env._on_progress(int(t))
         return True
 
     def process(self, generator: Generator[Event, Any, Any]) -> simpy.Process:
@@ -232,7 +357,7 @@ class Simulation:
         writes the trace afterwards (the runner) keeps everything recorded up to that instant;
         then the :meth:`on_stop` callbacks are called (once per call).
         """
-        self.timebase.check_ticks(until, name="until")
+        until = self.timebase.check_ticks(until, name="until")  # an int: the clock stays one
         end: At | None = None
         watching: list[At] = []  # the next check of stop_when
         if stop_when is not None and until > self.now:  # (else env.run says why it cannot run)

@@ -59,7 +59,6 @@ def materialize_pulses(
     t0 = np.asarray(seg_t0, dtype=np.int64)
     duration = np.asarray(seg_duration, dtype=np.int64)
     count = np.asarray(seg_count, dtype=np.int64)
-    off = np.broadcast_to(np.asarray(offset, dtype=np.int64), t0.shape)
     if count.size and count.min() < 0:
         raise ValueError(f"seg_count has a negative value {int(count.min())} (allowed: >= 0)")
     k_first = np.broadcast_to(np.asarray(first, dtype=np.int64), t0.shape)
@@ -68,8 +67,12 @@ def materialize_pulses(
     total = int(taken.sum())
     if total == 0:
         return np.empty(0, dtype=np.int64)
-    seg_index = np.repeat(np.arange(count.size), taken)
+    # Each segment's values repeated over its pulses (np.repeat streams; indexing by a segment number gathers),
+    # the arithmetic in place: k, then k * duration, then // count, then + t0 + offset.
     starts = np.cumsum(taken) - taken
-    k = np.arange(total, dtype=np.int64) - np.repeat(starts - k_first, taken)
-    c = count[seg_index]
-    return t0[seg_index] + off[seg_index] + (k * duration[seg_index]) // c
+    k = np.arange(total, dtype=np.int64)
+    k -= np.repeat(starts - k_first, taken)
+    k *= np.repeat(duration, taken)
+    k //= np.repeat(count, taken)
+    k += np.repeat(t0 + np.broadcast_to(np.asarray(offset, dtype=np.int64), t0.shape), taken)
+    return k

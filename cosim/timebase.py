@@ -25,7 +25,6 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from decimal import Decimal
-from enum import IntEnum
 from fractions import Fraction
 from functools import cached_property
 
@@ -45,8 +44,13 @@ UNITS_S: dict[str, Fraction] = {
 _QUANTITY = re.compile(r"^\s*([-+]?[0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*([a-zµ]+)\s*$")
 
 
-class Priority(IntEnum):
-    """Named priorities of same-instant events (lower runs first)."""
+class Priority:
+    """Named priorities of same-instant events (lower runs first).
+
+    Plain ``int`` constants, not an enum: controllers name one for every event they schedule, and
+    reading an enum member costs several times a class attribute (Python 3.11's ``EnumType`` has a
+    ``__getattr__``), on the kernel's hottest path.
+    """
 
     URGENT = 0  # SimPy: process start, interrupts
     NORMAL = 1  # SimPy: follow-on events (a process resuming)

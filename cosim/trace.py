@@ -49,7 +49,7 @@ import numpy.typing as npt
 from cosim.errors import ConfigurationError
 from cosim.pulses import materialize_pulses
 from cosim.timebase import TimeBase
-from cosim.tracestore import SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
+from cosim.tracestore import DTYPES, SPILL_ROWS, Columns, Spool, merge_sorted, segment_pulses
 
 Kind = Literal["bit", "int", "real", "pulse"]
 KINDS: tuple[str, ...] = ("bit", "int", "real", "pulse")
@@ -59,6 +59,9 @@ Floats = npt.NDArray[np.float64]
 Int8s = npt.NDArray[np.int8]
 #: Most pulses in one chunk of :meth:`Trace.pulse_chunks` (about 2.3 MiB of ``t, dir``).
 CHUNK_PULSES = 1 << 18
+#: Most pulses kept materialised between reads (about 36 MiB of ``t, dir``): several checks of one train
+#: held in memory materialise it once; the trains read longest ago are forgotten first.
+KEPT_PULSES = 1 << 22
 #: Console lines kept in memory; more go to a file in the spill folder (an hour of PRINT in a loop stays bounded).
 CONSOLE_LINES = 1 << 16
 _VALUE_FIELDS = (("t", "q"), ("v", "d"))
@@ -465,6 +468,11 @@ class Trace:
                 if total:
                     yield self.pulses(name)
                 return
+            if total <= KEPT_PULSES:  # the kept arrays, in the chunks segment_pulses would cut
+                t, d = self.pulses(name)
+                for k in range(0, t.size, self.chunk_pulses):
+                    yield t[k:k + self.chunk_pulses], d[k:k + self.chunk_pulses]
+                return
         if not (segments.in_order() and singles.in_order()):
             t, d = self.pulses(name)
             for k in range(0, t.size, self.chunk_pulses):
@@ -509,15 +517,22 @@ class Trace:
     def pulses(self, name: str) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int8]]:
         """``(t, dir)`` of every pulse of a pulse train, materialised exactly, in time order.
 
-        The arrays are read-only and kept until the train records more pulses, so several checks
-        of one train materialise it once. For long trains prefer :meth:`pulse_chunks`.
+        The arrays are read-only and kept until the train records more pulses (or, beyond
+        :data:`KEPT_PULSES` in all, until other trains are read), so several checks of one train
+        materialise it once. For long trains prefer :meth:`pulse_chunks`.
         """
         train = self._train(name)
         version = (len(train.segments), len(train.singles))
-        cached = self._pulse_cache.get(name)
+        cached = self._pulse_cache.pop(name, None)
         if cached is not None and cached[0] == version:
+            self._pulse_cache[name] = cached  # read last: forgotten last
             return cached[1], cached[2]
-        if train.segments.in_order() and train.singles.in_order():
+        segments = train.segments
+        if not segments.spilled and not len(train.singles) and segments.in_order():  # in one piece, no merge
+            t0, duration, count, direction = (np.frombuffer(a, dtype=DTYPES[a.typecode]) for a in segments.arrays[:4])
+            t = materialize_pulses(t0, duration, count)
+            d = np.repeat(direction, count)
+        elif train.segments.in_order() and train.singles.in_order():
             parts = list(self._ordered_pulses(train))
             t = np.concatenate([p[0] for p in parts]) if parts else np.empty(0, np.int64)
             d = np.concatenate([p[1] for p in parts]) if parts else np.empty(0, np.int8)
@@ -530,7 +545,13 @@ class Trace:
             t, d = np.concatenate([t, t_single])[order], np.concatenate([d, d_single])[order]
         t.setflags(write=False)
         d.setflags(write=False)
-        self._pulse_cache[name] = (version, t, d)
+        cache = self._pulse_cache
+        cache[name] = (version, t, d)  # the newest last
+        kept = sum(entry[1].size for entry in cache.values())
+        for old in list(cache):
+            if kept <= KEPT_PULSES or old == name:
+                break
+            kept -= cache.pop(old)[1].size
         return t, d
 
     # -- header and bulk filling (for readers of stored traces) --------------------------------

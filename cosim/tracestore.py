@@ -32,7 +32,7 @@ import numpy.typing as npt
 from cosim.pulses import materialize_pulses
 
 Chunk = tuple[npt.NDArray[Any], ...]
-DTYPES = {"q": np.int64, "d": np.float64, "b": np.int8}
+DTYPES: dict[str, type[np.generic]] = {"q": np.int64, "d": np.float64, "b": np.int8}
 #: Rows of one table kept in memory before they go to disk (about 1 MiB for ``t, v``).
 SPILL_ROWS = 1 << 16
 
@@ -175,7 +175,10 @@ class Columns:
             self._writer = pa.ipc.new_stream(self._file, self._schema)
             self.spool.keep(self._file)
             self.spool.keep(self._writer)
-        self._writer.write_batch(pa.record_batch([pa.array(c) for c in chunk], schema=self._schema))
+        # Arrays made from the numpy buffers (pa.array would import pandas, a second or so, for nothing)
+        columns = [pa.Array.from_buffers(field.type, len(c), [None, pa.py_buffer(c)])
+                   for field, c in zip(self._schema, chunk, strict=True)]
+        self._writer.write_batch(pa.record_batch(columns, schema=self._schema))
         self.batches += 1
         self.spilled += len(chunk[0])
         for a in self.arrays:
@@ -190,7 +193,7 @@ class Columns:
                 reader = pa.ipc.open_stream(source)
                 for _ in range(self.batches):
                     batch = reader.read_next_batch()
-                    yield tuple(batch.column(i).to_numpy() for i in range(batch.num_columns))
+                    yield tuple(_numpy(batch.column(i), DTYPES[code]) for i, (_, code) in enumerate(self.fields))
         if len(self.arrays[0]):
             yield self.tail()
 
@@ -279,6 +282,12 @@ def _merged(parts: list[Chunk]) -> Chunk:
     joined = tuple(np.concatenate(cols) for cols in zip(*parts, strict=True))
     order = np.argsort(joined[0], kind="stable")
     return tuple(c[order] for c in joined)
+
+
+def _numpy(column: Any, dtype: type[np.generic]) -> npt.NDArray[Any]:
+    """A spilled column (primitive, no nulls) as a numpy view of its buffer (``to_numpy`` would import pandas)."""
+    values = np.frombuffer(column.buffers()[1], dtype=dtype)
+    return values[column.offset:column.offset + len(column)]
 
 
 def segment_pulses(segments: Columns, limit: int, *, column: int = 3) -> Iterator[tuple[npt.NDArray[np.int64],

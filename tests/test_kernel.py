@@ -181,3 +181,62 @@ def test_a_run_with_stop_when_that_never_holds_ends_at_until() -> None:
 def test_stop_when_needs_a_positive_whole_period() -> None:
     with pytest.raises(ConfigurationError, match="every = 0 is not allowed"):
         Simulation().run(1000, stop_when=lambda: True, every=0)
+
+
+def test_same_instant_same_priority_runs_in_the_order_scheduled_whichever_method(
+        sim: Simulation, log: list[object]) -> None:
+    """at 100, SLOT: a (call_at), b (a process's at), c (after), d (call_at) -- in that order, after SERVO."""
+
+    def waiter(name: str, event: object) -> object:
+        yield event
+        log.append((sim.now, name))
+
+    sim.call_at(100, Priority.SLOT, lambda: log.append((sim.now, "a")))
+    sim.process(waiter("b", sim.at(100, Priority.SLOT)))  # type: ignore[arg-type]
+    sim.process(waiter("c", sim.after(100, Priority.SLOT)))  # type: ignore[arg-type]
+    sim.call_at(100, Priority.SLOT, lambda: log.append((sim.now, "d")))
+    sim.call_at(100, Priority.SERVO, lambda: log.append((sim.now, "servo")))
+    sim.run(until=200)
+    assert log == [(100, "servo"), (100, "a"), (100, "b"), (100, "c"), (100, "d")]
+
+
+def test_the_clock_stays_an_int_whatever_integer_type_is_given(sim: Simulation) -> None:
+    import numpy as np
+
+    seen: list[object] = []
+    sim.call_at(np.int64(30), Priority.HOST, lambda: seen.append(sim.now))  # type: ignore[arg-type]
+    sim.run(until=np.int64(50))  # type: ignore[arg-type]
+    assert seen == [30] and type(seen[0]) is int and type(sim.now) is int and sim.now == 50
+    sim.after(np.int64(5), Priority.HOST).callbacks.append(lambda _e: seen.append(sim.now))  # type: ignore[arg-type]
+    sim.run(until=100)
+    assert seen == [30, 55] and type(seen[1]) is int
+
+
+def test_a_look_ahead_added_while_running_is_called_from_then_on(sim: Simulation, log: list[object]) -> None:
+    """Slots at 0, 100, 200, 300; the look-ahead is added by the pass at 100: it sees 100 -> 200 and 200 -> 300."""
+
+    def slots() -> object:
+        for k in range(4):
+            yield sim.at(100 * k, Priority.SLOT)
+            if k == 1:
+                sim.add_look_ahead(lambda t_next: log.append((sim.now, t_next)))
+
+    sim.process(slots())  # type: ignore[arg-type]
+    sim.run(until=350)
+    assert log == [(100, 200), (200, 300), (300, 350)]
+
+
+def test_progress_is_reported_every_4096_steps_of_work_and_can_be_switched_off(sim: Simulation) -> None:
+    reported: list[int] = []
+
+    def ticks() -> object:
+        for k in range(3 * 4096):
+            yield sim.at(k, Priority.SLOT)
+
+    sim.env.on_progress = reported.append
+    sim.process(ticks())  # type: ignore[arg-type]
+    sim.run(until=2 * 4096)
+    assert len(reported) == 2 and reported == sorted(reported)
+    sim.env.on_progress = None
+    sim.run(until=3 * 4096)
+    assert len(reported) == 2

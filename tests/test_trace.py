@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -12,6 +13,8 @@ from cosim.errors import ConfigurationError
 from cosim.export import read_trace, write_trace
 from cosim.kernel import Simulation
 from cosim.signals import PulseTrain, Signal
+from cosim.timebase import TimeBase
+from cosim.trace import Trace
 
 
 def _scenario(sim: Simulation) -> None:
@@ -184,3 +187,48 @@ def test_widths_are_required_where_they_vary_and_refused_elsewhere(sim: Simulati
         sim.trace.extend_segments("dev.axis1.pwm", [0], [10], [1], [1])
     with pytest.raises(ConfigurationError, match="only a pulse train has a varying width"):
         sim.trace.declare("dev.axis1.level", "bit", varying_width=True)
+
+
+def _long_train(chunk_pulses: int) -> Trace:
+    """A train of 5 segments x 7 pulses (35 pulses), read in chunks of ``chunk_pulses``."""
+    trace = Trace(TimeBase(), chunk_pulses=chunk_pulses)
+    trace.declare("dev.step", "pulse")
+    for k in range(5):
+        trace.record_segment("dev.step", 1000 * k, 1000, 7, k % 2)
+    return trace
+
+
+def test_a_train_in_memory_is_materialised_once_for_several_readers(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cosim.trace
+    import cosim.tracestore
+
+    calls: list[int] = []
+    original = cosim.tracestore.materialize_pulses
+
+    def counting(*args: Any, **kwargs: Any) -> np.ndarray:
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(cosim.tracestore, "materialize_pulses", counting)
+    monkeypatch.setattr(cosim.trace, "materialize_pulses", counting)
+    trace = _long_train(chunk_pulses=10)
+    first = [(t.tolist(), d.tolist()) for t, d in trace.pulse_chunks("dev.step")]
+    made = len(calls)
+    second = [(t.tolist(), d.tolist()) for t, d in trace.pulse_chunks("dev.step")]
+    assert first == second and [len(t) for t, _ in first] == [10, 10, 10, 5]
+    assert first[0][0][:8] == [0, 142, 285, 428, 571, 714, 857, 1000] and first[0][1][:8] == [0] * 7 + [1]
+    assert made > 0 and len(calls) == made  # the second reader got the kept arrays
+
+
+def test_trains_read_longest_ago_are_forgotten_beyond_the_kept_pulses(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cosim.trace
+
+    monkeypatch.setattr(cosim.trace, "KEPT_PULSES", 40)
+    trace = _long_train(chunk_pulses=10)
+    trace.declare("dev.other", "pulse")
+    trace.record_segment("dev.other", 0, 1000, 20, 1)
+    trace.pulses("dev.step")
+    trace.pulses("dev.other")  # 35 + 20 > 40: dev.step is forgotten
+    assert list(trace._pulse_cache) == ["dev.other"]
+    trace.pulses("dev.step")
+    assert list(trace._pulse_cache) == ["dev.step"]

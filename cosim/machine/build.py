@@ -13,15 +13,11 @@ stops the machine before anything is simulated.
 from __future__ import annotations
 
 import re
+from importlib import import_module
 from pathlib import Path
 from typing import Any
 
 from cosim.controllers.scripted import play
-from cosim.couplings.encoder import couple_encoder
-from cosim.couplings.laser import couple_laser
-from cosim.couplings.servo import couple_servo
-from cosim.couplings.stepper import couple_stepper
-from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError, FmuError
 from cosim.machine.checks import check_from_table, figure_from_table
 from cosim.machine.document import Table
@@ -30,9 +26,11 @@ from cosim.machine.families import Family, families
 from cosim.master import PlantLike
 from cosim.scenario import Run
 
-#: Couplings a plant table may name, with the function that joins a port to the plant.
-COUPLINGS = {"stepper": couple_stepper, "laser": couple_laser, "switches": None, "encoder": couple_encoder,
-             "servo": couple_servo}
+#: Couplings a plant table may name, with the module and function that join a port to the plant (imported
+#: when a plant names the coupling: the servo coupling's python-control is loaded only by a machine that uses it).
+COUPLINGS = {"stepper": "cosim.couplings.stepper:couple_stepper", "laser": "cosim.couplings.laser:couple_laser",
+             "switches": "cosim.couplings.switches:couple_switches",
+             "encoder": "cosim.couplings.encoder:couple_encoder", "servo": "cosim.couplings.servo:couple_servo"}
 PLANT_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
@@ -128,11 +126,13 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
         if variables is not None and not isinstance(variables, dict):
             raise spec.error("variables", variables, "a table {role = \"variable\"} (a role = \"\" leaves it unwired)")
         mapping = {k: (v or None) for k, v in (variables or {}).items()}
+        module, function = COUPLINGS[kind].split(":")
+        couple = getattr(import_module(module), function)
         with spec.at():
             if kind == "switches":
-                couple_switches(plant, port, variables=mapping)
+                couple(plant, port, variables=mapping)
             else:
-                COUPLINGS[kind](port, plant, variables=mapping)  # type: ignore[misc]
+                couple(port, plant, variables=mapping)
     inputs = table.text("input", None)  # an input table (cosim.fmuinput): the plant's inputs over time
     if inputs is not None:
         from cosim.fmuinput import drive_from_table, read_input_table

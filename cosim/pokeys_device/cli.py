@@ -8,7 +8,6 @@ Wired into the ``cosim`` command by :func:`add_parser` and :func:`cmd_pokeys_dev
 from __future__ import annotations
 
 import argparse
-import asyncio
 import contextlib
 import re
 import signal
@@ -108,6 +107,8 @@ def _region(at: int, *, upward: bool) -> Callable[[int], bool]:
 
 
 async def _serve(server: DeviceServer, duration_s: float | None) -> None:
+    import asyncio
+
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -157,6 +158,8 @@ def cmd_pokeys_device(args: argparse.Namespace) -> int:
     engine = "pulse engine v1 (0x80)" if identity.pulse_engine == 1 else "pulse engine v2 (0x85, 0xB0)"
     print(f"virtual PoKeys{identity.model} serial {identity.serial}, {engine}, on UDP and TCP "
           f"{args.host}:{args.port}" + (f" for {args.duration} s" if args.duration else "; Ctrl-C stops"), flush=True)
+    import asyncio  # here, not at the top: `cosim --help` and `cosim run` build this command's parser
+
     with background_stderr() as log_queue, contextlib.suppress(KeyboardInterrupt):
         try:
             asyncio.run(_serve(server, args.duration))

@@ -13,9 +13,10 @@ from __future__ import annotations
 import re
 from fractions import Fraction
 
-from lark import Lark, Token, Tree
+from lark import Token, Tree
 from lark.exceptions import UnexpectedInput, UnexpectedToken
 
+from cosim.controllers.grammars import lark_parser
 from cosim.controllers.pmac import arith, ivars
 from cosim.controllers.pmac.ect import TURBO_ECT_BASE
 from cosim.controllers.pmac.grammar import GRAMMAR
@@ -79,8 +80,8 @@ PROG_RANGE = (1, 32767)
 PLC_RANGE = (0, 31)
 LABEL_RANGE = (0, 99999)
 
-_PARSER = Lark(GRAMMAR, parser="lalr", start=["online_line", "program_line"], propagate_positions=True,
-               maybe_placeholders=True)
+_PARSER = lark_parser(GRAMMAR, parser="lalr", start=["online_line", "program_line"], propagate_positions=True,
+                      maybe_placeholders=True)
 _WORD = re.compile(r"[A-Za-z0-9_.$@]+|\S+")
 
 

@@ -59,6 +59,12 @@ from cosim.signals import PulseTrain, Signal, StepDirPort, SwitchPort
 from cosim.timebase import Priority
 from cosim.validate import integer
 
+# States read on every slot, as module constants: reading an enum member (EngineState.BUFFER) costs several
+# times a global on Python 3.11 (its EnumType has a __getattr__).
+_BUFFER, _INTERNAL = EngineState.BUFFER, EngineState.INTERNAL
+_JOGGING, _HOMING = EngineState.JOGGING, EngineState.HOMING
+_RUNNING, _READY = AxisState.RUNNING, AxisState.READY
+
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
 
 
@@ -157,6 +163,7 @@ class PulseEngine:
         self._over_limit = tuple(b & COUNT_MASK > self.device.max_pulses_per_slot for b in range(256))
         self._emitters = [train.emit for train in self.steps]
         self._pos_setters = [register.set for register in self.positions]
+        self._entry_plans: dict[bytes, tuple[tuple[int, bool, int, int, int], ...]] = {}
         sim.process(self.pulse_slot())
 
     # -- host commands ------------------------------------------------------------------------
@@ -369,26 +376,26 @@ class PulseEngine:
         if sample.stop_candidate:
             self._evaluate_switches(sample)
         state = self._state
-        if state is EngineState.BUFFER or state is EngineState.INTERNAL:
+        if state is _BUFFER or state is _INTERNAL:
             entry = self.buffer.pop()
             if entry is None:
-                if state is EngineState.BUFFER and self._armed:
+                if state is _BUFFER and self._armed:
                     if self._stretch_start is None:
                         self._stretch_start = t
                     self._stretch_slots += 1
                 self._idle_axes()
             else:
-                if state is EngineState.BUFFER:
+                if state is _BUFFER:
                     if self._stretch_start is not None:
                         self._close_underrun(t)
                     self._armed = True
                 self._emit_entry(t, entry)
-            if state is EngineState.INTERNAL:
+            if state is _INTERNAL:
                 self._produce()
             self.buffer_level.set(self.buffer.level, t)
-        elif state is EngineState.JOGGING:
+        elif state is _JOGGING:
             self._emit_counts(t, [m.step() for m in self._motions])
-        elif state is EngineState.HOMING:
+        elif state is _HOMING:
             self._homing_slot(t, sample)
 
     def _evaluate_switches(self, sample: SwitchSample) -> None:
@@ -412,23 +419,40 @@ class PulseEngine:
 
     # -- emitting -----------------------------------------------------------------------------
     def _emit_entry(self, t: int, entry: bytes) -> None:
-        """The buffer path of :meth:`_emit_axis` for every axis, inlined (it runs every slot)."""
-        states, dir_bit, pos = self._axis_states, self._dir_bit, self._pos
+        """The buffer path of :meth:`_emit_axis` for every axis, inlined (it runs every slot).
+
+        Each distinct entry is decoded once (a job's entries repeat: the planner shares equal ones).
+        """
+        plan = self._entry_plans.get(entry)
+        if plan is None:
+            plan = self._entry_plan(entry)
+        states, dir_bit, pos, pos_setters, emitters = (self._axis_states, self._dir_bit, self._pos,
+                                                       self._pos_setters, self._emitters)
         t_pulse, slot = t + self.dir_setup_ticks, self.slot_ticks
-        for a, byte in enumerate(entry):
-            negative = byte >= DIRECTION_BIT
+        for a, negative, count, direction, delta in plan:
             if negative is not dir_bit[a]:
                 dir_bit[a] = negative
                 self.dirs[a].set(negative != self.config.axes[a].invert_direction)
-            count = byte & COUNT_MASK
             if count:
-                self._emitters[a](t_pulse, slot, count, 0 if negative else 1)
-                pos[a] += -count if negative else count
-                self._pos_setters[a](pos[a], t)
-                if states[a] is not AxisState.RUNNING:
-                    self._set_axis_state(a, AxisState.RUNNING)
-            elif states[a] is not AxisState.READY:
-                self._set_axis_state(a, AxisState.READY)
+                emitters[a](t_pulse, slot, count, direction)
+                pos[a] = position = pos[a] + delta
+                pos_setters[a](position, t)
+                if states[a] is not _RUNNING:
+                    self._set_axis_state(a, _RUNNING)
+            elif states[a] is not _READY:
+                self._set_axis_state(a, _READY)
+
+    def _entry_plan(self, entry: bytes) -> tuple[tuple[int, bool, int, int, int], ...]:
+        """``(axis, negative, count, direction, signed count)`` of each axis of ``entry``, kept for its next use."""
+        plan = []
+        for a, byte in enumerate(entry):
+            negative = byte >= DIRECTION_BIT
+            count = byte & COUNT_MASK
+            plan.append((a, negative, count, 0 if negative else 1, -count if negative else count))
+        if len(self._entry_plans) >= 4096:  # a job with many distinct entries: keep the table bounded
+            self._entry_plans.clear()
+        self._entry_plans[entry] = kept = tuple(plan)
+        return kept
 
     def _emit_counts(self, t: int, counts: Sequence[int], *, track_states: bool = True) -> None:
         for a, count in enumerate(counts):

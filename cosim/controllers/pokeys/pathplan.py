@@ -40,7 +40,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from math import isqrt
+from functools import cached_property
+from math import isqrt, lcm
 
 from cosim.controllers.pokeys.limits import AXIS_NAMES, MAX_PULSES_PER_SLOT, SLOTS_PER_S
 from cosim.controllers.pokeys.toolpath import Arc, Line, Pause, Point, Spindle, Toolpath
@@ -81,15 +82,16 @@ class HostAxis:
         positive(self.max_velocity, "max_velocity", unit="units/s", where=where)
         positive(self.max_accel, "max_accel", unit="units/s^2", where=where)
 
-    @property
+    @cached_property
     def spu(self) -> Fraction:
         """Steps per unit, exactly."""
         return positive(self.steps_per_unit, "steps_per_unit")
 
     def steps(self, position: Fraction) -> int:
         """The step a position [units] falls on: nearest, halves away from zero."""
-        exact = position * self.spu
-        return math.floor(exact + Fraction(1, 2)) if exact >= 0 else -math.floor(-exact + Fraction(1, 2))
+        spu = self.spu  # position * spu = num / den, rounded in integers: floor(x + 1/2), or -floor(-x + 1/2)
+        num, den = position.numerator * spu.numerator, position.denominator * spu.denominator
+        return (2 * num + den) // (2 * den) if num >= 0 else -((den - 2 * num) // (2 * den))
 
 
 @dataclass(frozen=True)
@@ -201,6 +203,9 @@ class _Builder:
         self.engine_bound = [v > limit for v in per_slot]
         self.vlim = [min(v, Fraction(limit)) for v in per_slot]
         self.alim = [a.spu * positive(a.max_accel, "max_accel") / SLOTS_PER_S**2 for a in axes]
+        # the same in integers for segment(): a move of d steps is d * unit_factor / unit_den units
+        self.unit_den = lcm(*(spu.numerator for spu in self.spu))
+        self.unit_factor = [spu.denominator * (self.unit_den // spu.numerator) for spu in self.spu]
         self.override = in_range(settings.feed_override, "feed_override", low=0, low_open=True, high=10)
         self.blend = settings.mode == "blend"
         self.deviation = float(positive(settings.tolerance, "tolerance")) * QUANTA_PER_UNIT
@@ -241,21 +246,30 @@ class _Builder:
         deltas = [t - s for t, s in zip(target, self.steps, strict=True)]
         if not any(deltas):
             return
-        units = [Fraction(d) / spu for d, spu in zip(deltas, self.spu, strict=True)]
-        square = sum(u * u for u in units) * QUANTA_PER_UNIT**2
-        length = isqrt(square.numerator // square.denominator)
-        length += length * length < square
+        # Exact integer arithmetic throughout (as Fractions would give it, at a tenth of the cost):
+        # axis a moves units[a] / den units; the length is the ceiling of the XYZ length in quanta.
+        den = self.unit_den
+        units = [d * f for d, f in zip(deltas, self.unit_factor, strict=True)]
+        square = sum(u * u for u in units) * QUANTA_PER_UNIT**2  # the length^2 in quanta, times den^2
+        length = isqrt(square // (den * den))
+        length += length * length * den * den < square
         moving = [(a, abs(d)) for a, d in enumerate(deltas) if d]
-        axis_bound = min((self.vlim[a] * length / d, a) for a, d in moving)
-        accel = max(1, math.floor(min(self.alim[a] * length / d for a, d in moving)))
-        vmax = math.floor(axis_bound[0])
+        # the slowest axis' bound on the path speed, vlim[a] * length / d (the first such axis on a tie)
+        best, best_n, best_d = -1, 0, 1
+        for a, d in moving:
+            n, m = self.vlim[a].numerator * length, self.vlim[a].denominator * d
+            if best < 0 or n * best_d < best_n * m:
+                best, best_n, best_d = a, n, m
+        axis_bound = (Fraction(best_n, best_d), best)
+        accel = max(1, min(self.alim[a].numerator * length // (self.alim[a].denominator * d) for a, d in moving))
+        vmax = best_n // best_d
         if feed is not None:
             wanted = feed * self.override * QUANTA_PER_UNIT / SLOTS_PER_S
             if wanted > axis_bound[0]:
                 self.note(line, wanted, axis_bound, length, deltas)
             vmax = min(vmax, math.floor(wanted))
         vmax = max(1, vmax)
-        direction = tuple(float(u) for u in units)
+        direction = tuple(u / den for u in units)  # correctly rounded, as float(Fraction(u, den))
         norm = math.sqrt(sum(u * u for u in direction))
         start = (*self.steps, *([0] * (self.n_axes - 3)))
         self.steps = target

@@ -119,18 +119,23 @@ def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
     """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit."""
     entries = []
     encoded: dict[tuple[tuple[int, ...], tuple[bool, ...]], Entry] = {}  # equal entries: one object, encoded once
+    # (counts, direction bits before) -> (entry, direction bits after): a job repeats few slots many times
+    after: dict[tuple[tuple[int, ...], tuple[bool, ...]], tuple[Entry, tuple[bool, ...]]] = {}
     negative: tuple[bool, ...] | None = None
     for slot in counts:
         counts_ = slot if isinstance(slot, tuple) else tuple(slot)
         if negative is None:
             negative = (False,) * len(counts_)
-        negative = tuple(c < 0 if c else n for c, n in zip(counts_, negative, strict=True))
-        entry = encoded.get((counts_, negative))
-        if entry is None:
-            entry = encoded[counts_, negative] = encode_entry(counts_, negative=negative)
+        known = after.get((counts_, negative))
+        if known is None:
+            bits = tuple(c < 0 if c else n for c, n in zip(counts_, negative, strict=True))
+            entry = encoded.get((counts_, bits))
+            if entry is None:
+                entry = encoded[counts_, bits] = encode_entry(counts_, negative=bits)
+            known = after[counts_, negative] = (entry, bits)
+        entry, negative = known
         entries.append(entry)
     return entries
-
 
 __all__ = ["Counts", "Dwell", "HostAxis", "Move", "PathSettings", "PlannedJob", "plan", "plan_move", "plan_toolpath",
            "to_entries"]

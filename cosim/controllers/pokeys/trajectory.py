@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from operator import sub
 
 from cosim.controllers.pokeys.profile import fastest_arriving
 from cosim.errors import ConfigurationError
@@ -94,29 +95,38 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
     seg = segments[0]
     pos = list(seg.start)
     out: list[Counts] = []
-    axes = range(len(pos))
-    while not (k == n - 1 and lam == seg.length):
-        w = corners[k]
-        remaining = seg.length - lam - (1 if w > 0 else 0)
-        u = max(max(0, v - seg.decel), min(v + seg.accel, seg.vmax, fastest_arriving(remaining, seg.decel, w)))
+    # the current segment's numbers, read once per segment (the loop runs once per slot)
+    length, vmax, accel, decel, w = seg.length, seg.vmax, seg.accel, seg.decel, corners[0]
+    parts = _parts(seg)
+    while not (k == n - 1 and lam == length):
+        remaining = length - lam - (1 if w > 0 else 0)
+        u = max(max(0, v - decel), min(v + accel, vmax, fastest_arriving(remaining, decel, w)))
         if u <= 0:
             raise RuntimeError(f"planner: no progress at segment {k} of {n} ({seg})")
         lam += u
         landed = False
-        while lam >= seg.length and k < n - 1:
-            if corners[k] == 0:
-                if lam != seg.length:
-                    raise RuntimeError(f"planner: passed the exact stop at the end of segment {k} ({seg})")
-                landed = True
-            lam -= seg.length
-            k += 1
-            seg = segments[k]
-        if lam > seg.length:
-            raise RuntimeError(f"planner: passed the end of the chain by {lam - seg.length} quanta")
-        start, end, length = seg.start, seg.end, seg.length
-        now = [start[a] + (end[a] - start[a]) * lam // length if end[a] >= start[a]
-               else start[a] - (start[a] - end[a]) * lam // length for a in axes]
-        out.append(tuple(now[a] - pos[a] for a in axes))
+        if lam >= length and k < n - 1:
+            while lam >= length and k < n - 1:
+                if corners[k] == 0:
+                    if lam != length:
+                        raise RuntimeError(f"planner: passed the exact stop at the end of segment {k} ({seg})")
+                    landed = True
+                lam -= length
+                k += 1
+                seg = segments[k]
+                length = seg.length
+            vmax, accel, decel, w = seg.vmax, seg.accel, seg.decel, corners[k]
+            parts = _parts(seg)
+        if lam > length:
+            raise RuntimeError(f"planner: passed the end of the chain by {lam - length} quanta")
+        # each axis at start + trunc(delta * lam / length), truncated towards the segment's start
+        now = [s + d * lam // length if d >= 0 else s - -d * lam // length for s, d in parts]
+        out.append(tuple(map(sub, now, pos)))
         pos = now
         v = 0 if landed else u
     return out
+
+
+def _parts(seg: Segment) -> list[tuple[int, int]]:
+    """``(start, end - start)`` of each axis of ``seg``."""
+    return [(a, b - a) for a, b in zip(seg.start, seg.end, strict=True)]

@@ -26,11 +26,12 @@ from pathlib import Path
 from typing import Any
 
 import simpy
-from lark import Lark, Tree
+from lark import Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 from simpy.events import Event
 
 from cosim import validate
+from cosim.controllers.grammars import lark_parser
 from cosim.controllers.trio.compiler import Compiled, Compiler
 from cosim.controllers.trio.controller import TrioController
 from cosim.controllers.trio.grammar import GRAMMAR, normalise_lines
@@ -49,7 +50,7 @@ MAX_GOSUB_DEPTH = 64
 #: Longest console line [characters]; a longer one is written in parts.
 MAX_PRINT_LINE = 10_000
 
-_PARSER = Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+_PARSER = lark_parser(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 _TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXNUM": "a $hex number",
               "STRING": "a \"string\"", "LABEL": "a label", "LPAR": "(", "RPAR": ")", "COMMA": ",", "_COMMA": ",",
               "COLON": ":", "SEMICOLON": ";", "MINUS": "-", "PLUS": "+", "_EQ": "=", "CMP": "a comparison",

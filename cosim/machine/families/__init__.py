@@ -3,6 +3,8 @@ tables become a controller, its ports and its programs (see :class:`Family`)."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator, Mapping
+from importlib import import_module
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -31,10 +33,27 @@ class Family(Protocol):
         ...
 
 
-def families() -> dict[str, Family]:
-    """Every family, by its ``family`` key."""
-    from cosim.machine.families.pmac import PmacFamily
-    from cosim.machine.families.pokeys import PoKeysFamily
-    from cosim.machine.families.trio import TrioFamily
+#: Every family by its ``family`` key: the module and class that implement it (imported when a machine
+#: names it, so that a Trio machine does not load the PMAC runtime).
+FAMILIES = {"trio": "cosim.machine.families.trio:TrioFamily", "pokeys": "cosim.machine.families.pokeys:PoKeysFamily",
+            "pmac": "cosim.machine.families.pmac:PmacFamily"}
 
-    return {f.name: f for f in (TrioFamily(), PoKeysFamily(), PmacFamily())}
+
+class _Families(Mapping[str, Family]):
+    """The families by key; a family's module is imported when it is looked up."""
+
+    def __getitem__(self, name: str) -> Family:
+        module, cls = FAMILIES[name].split(":")
+        family: Family = getattr(import_module(module), cls)()
+        return family
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(FAMILIES)
+
+    def __len__(self) -> int:
+        return len(FAMILIES)
+
+
+def families() -> Mapping[str, Family]:
+    """Every family, by its ``family`` key (its module is imported when it is looked up)."""
+    return _Families()

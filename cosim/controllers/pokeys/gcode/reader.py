@@ -36,13 +36,14 @@ from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
 
-from lark import Lark, Token
+from lark import Token
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
+from cosim.controllers.grammars import lark_parser
 from cosim.controllers.pokeys.gcode.grammar import GRAMMAR
 from cosim.errors import ConfigurationError
 
-_PARSER = Lark(GRAMMAR, parser="lalr")
+_PARSER = lark_parser(GRAMMAR, parser="lalr")
 
 #: Supported G codes by modal group (two of one group on a line is an error, as in RS274/NGC).
 G_GROUPS: dict[str, tuple[int, ...]] = {
