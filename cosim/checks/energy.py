@@ -60,6 +60,9 @@ class EnergyPerLength(Check):
         validate.finite(self.lower, "lower", where=self.where)
         validate.finite(self.upper, "upper", where=self.where)
         validate.positive(self.window, "window", unit="units", where=self.where)
+        if isinstance(self.positions, str) or not isinstance(self.positions, Sequence):
+            raise ConfigurationError.out_of_range("positions", self.positions, "a list of position signals, e.g. "
+                                                  "[\"trio.axis3.dpos\", \"trio.axis2.dpos\"]", where=self.where)
         if not self.positions:
             raise ConfigurationError.out_of_range("positions", list(self.positions), "one or more position signals",
                                                   where=self.where)
