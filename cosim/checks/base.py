@@ -186,6 +186,12 @@ def records(trace: Trace, name: str, check: Check) -> tuple[Ints, Floats]:
     return trace.edges(name)
 
 
+def unit_of(trace: Trace, name: str) -> str:
+    """The unit ``name`` was declared with (``""`` when it has none or is not in the trace)."""
+    info = trace.info.get(name)
+    return info.unit if info is not None else ""
+
+
 def changes(t: Ints, v: Floats) -> tuple[Ints, Floats]:
     """The records where the value differs from the one before (the first record is the initial value)."""
     moved = np.flatnonzero(v[1:] != v[:-1]) + 1
