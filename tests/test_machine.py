@@ -157,3 +157,17 @@ def test_set_reaches_a_key_of_an_array_of_tables_by_the_name_params_shows(trio_m
     trio_machine.write_text(TRIO + '\n[[check]]\ntype = "IntervalsAbove"\nsignal = "trio.wdog"\nlimit = 0\n'
                                    'until = "1 ms"\n')
     assert load_machine(trio_machine).resolve({"until": '"2 s"'})["machine"]["until"] == "2 s"
+
+
+@pytest.mark.parametrize("example", ["trio_tn20_81_fmu/tn20_81.toml", "pokeys_mill/mill.toml"])
+def test_a_trio_or_pokeys_machine_does_not_import_the_pmac_servo_design(example: str) -> None:
+    """python-control (and with it scipy and matplotlib) was imported by every machine build: seconds of
+    start-up, and 60 MB of wheels in every exported FMU (docs/export.md: 'numpy is the largest')."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom cosim.machine import load_machine\nfrom cosim.machine.check import check_machine\n"
+            f"check_machine(load_machine({str(EXAMPLES / example)!r}))\n"
+            "print(sorted(m for m in ('control', 'scipy', 'matplotlib') if m in sys.modules))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -19,7 +19,6 @@ from typing import Any
 from cosim.controllers.scripted import play
 from cosim.couplings.encoder import couple_encoder
 from cosim.couplings.laser import couple_laser
-from cosim.couplings.servo import couple_servo
 from cosim.couplings.stepper import couple_stepper
 from cosim.couplings.switches import couple_switches
 from cosim.errors import ConfigurationError, FmuError
@@ -30,9 +29,17 @@ from cosim.machine.families import Family, families
 from cosim.master import PlantLike
 from cosim.scenario import Run
 
+
+def _couple_servo(port: Any, plant: Any, *, variables: Any = None) -> Any:
+    """:func:`cosim.couplings.servo.couple_servo`, imported when a servo is coupled (it imports python-control)."""
+    from cosim.couplings.servo import couple_servo
+
+    return couple_servo(port, plant, variables=variables)
+
+
 #: Couplings a plant table may name, with the function that joins a port to the plant.
 COUPLINGS = {"stepper": couple_stepper, "laser": couple_laser, "switches": None, "encoder": couple_encoder,
-             "servo": couple_servo}
+             "servo": _couple_servo}
 PLANT_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 

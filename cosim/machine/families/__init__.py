@@ -3,6 +3,8 @@ tables become a controller, its ports and its programs (see :class:`Family`)."""
 
 from __future__ import annotations
 
+import importlib
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -31,10 +33,29 @@ class Family(Protocol):
         ...
 
 
-def families() -> dict[str, Family]:
-    """Every family, by its ``family`` key."""
-    from cosim.machine.families.pmac import PmacFamily
-    from cosim.machine.families.pokeys import PoKeysFamily
-    from cosim.machine.families.trio import TrioFamily
+#: Each family's module and class, by its ``family`` key: imported when a machine of that family is built
+#: (the PMAC family's servo models import python-control, and with it scipy and matplotlib: seconds of
+#: start-up, and tens of MB in an exported FMU, that a Trio or PoKeys machine does not need).
+MODULES = {"trio": ("cosim.machine.families.trio", "TrioFamily"),
+           "pokeys": ("cosim.machine.families.pokeys", "PoKeysFamily"),
+           "pmac": ("cosim.machine.families.pmac", "PmacFamily")}
 
-    return {f.name: f for f in (TrioFamily(), PoKeysFamily(), PmacFamily())}
+
+class _Families(Mapping[str, Family]):
+    """The families by name, each imported when it is looked up."""
+
+    def __getitem__(self, name: str) -> Family:
+        module, cls = MODULES[name]
+        family: Family = getattr(importlib.import_module(module), cls)()
+        return family
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(MODULES)
+
+    def __len__(self) -> int:
+        return len(MODULES)
+
+
+def families() -> Mapping[str, Family]:
+    """Every family, by its ``family`` key (the one looked up is imported then)."""
+    return _Families()
