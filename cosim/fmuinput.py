@@ -125,7 +125,8 @@ def read_input_table(path: str | Path, variables: Mapping[str, Variable], *, tim
     path = Path(path)
     named = f"{where}: " if where else ""
     if not path.is_file():
-        raise ConfigurationError(f"{named}input table {path} does not exist")
+        missing = "is not a file" if path.exists() else "does not exist"
+        raise ConfigurationError(f"{named}input table {path} {missing}")
     try:
         with path.open(newline="", encoding="utf-8") as handle:
             rows = [(n, row) for n, row in enumerate(csv.reader(handle), start=1)

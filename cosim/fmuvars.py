@@ -260,11 +260,12 @@ class Variable:
         return int(value)
 
     def parse(self, text: str, *, where: str = "") -> Any:
-        """A value from text (``--set NAME=VALUE``), checked as :meth:`check` does.
+        """A value from text (``--set NAME=VALUE``, an input table's cell), checked as :meth:`check` does.
 
-        Numbers as Python writes them (integers also ``0x..``), ``true``/``false`` (``1``/``0``,
-        ``on``/``off``, ``yes``/``no``), an Enumeration's item name, a Binary in hex, a String as it
-        is; an array's elements separated by commas or spaces (brackets allowed).
+        Numbers as Python writes them (integers also ``0x..``; reals finite: not ``nan`` or ``inf``),
+        ``true``/``false`` (``1``/``0``, ``on``/``off``, ``yes``/``no``), an Enumeration's item name,
+        a Binary in hex, a String as it is; an array's elements separated by commas or spaces
+        (brackets allowed).
         """
         if self.shape:
             parts = [part for part in re.split(r"[\s,;]+", text.strip().strip("[]")) if part]
@@ -277,7 +278,13 @@ class Variable:
             if kind.is_integer:
                 return self.items[text] if text in self.items else int(text, 0)
             if kind.is_float:
-                return float(text)
+                number = float(text)
+                if not math.isfinite(number):  # no FMU input or parameter is given nan or inf from text
+                    allowed = self.allowed()
+                    raise ConfigurationError.out_of_range(
+                        self.name, text, allowed if allowed.startswith("any") else f"a finite number {allowed}",
+                        where=where)
+                return number
             if kind.python is bool:
                 return {"1": True, "true": True, "on": True, "yes": True,
                         "0": False, "false": False, "off": False, "no": False}[text.strip().lower()]

@@ -476,20 +476,11 @@ def user_line(exc: BaseException, path: Path) -> str:
     ours = [str(Path(__file__).resolve().parent)] + [
         str(Path(p).resolve()) for key in ("stdlib", "platstdlib", "purelib", "platlib")
         if (p := sysconfig.get_paths().get(key))]
-    seen: set[int] = set()
-    current: BaseException | None = exc
-    while current is not None and id(current) not in seen:
-        seen.add(id(current))
-        location = ""
-        for frame, line in traceback.walk_tb(current.__traceback__):
-            name = frame.f_code.co_filename
-            if name.startswith("<") or any(str(Path(name).resolve()).startswith(o) for o in ours):
-                continue
-            location = f"{name}:{line}: "
-        if location:
-            return location
-        current = current.__cause__ or current.__context__
-    return ""
+
+    def users(name: str) -> str | None:
+        return None if name.startswith("<") or any(str(Path(name).resolve()).startswith(o) for o in ours) else name
+
+    return _innermost(exc, users)
 
 
 def where(exc: BaseException, path: Path) -> str:
@@ -499,14 +490,21 @@ def where(exc: BaseException, path: Path) -> str:
     chain of causes is searched too.
     """
     target = str(path.resolve())
+    return _innermost(exc, lambda name: str(path) if str(Path(name).resolve()) == target else None)
+
+
+def _innermost(exc: BaseException, shown: Callable[[str], str | None]) -> str:
+    """``file:line: `` of the innermost frame of ``exc`` whose file ``shown`` names (None: not one of those),
+    searching its causes too when it has none; ``""`` when no frame is."""
     seen: set[int] = set()
     current: BaseException | None = exc
     while current is not None and id(current) not in seen:
         seen.add(id(current))
         location = ""
         for frame, line in traceback.walk_tb(current.__traceback__):
-            if str(Path(frame.f_code.co_filename).resolve()) == target:
-                location = f"{path}:{line}: "
+            name = shown(frame.f_code.co_filename)
+            if name is not None:
+                location = f"{name}:{line}: "
         if location:
             return location
         current = current.__cause__ or current.__context__

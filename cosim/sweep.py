@@ -47,6 +47,7 @@ import numpy as np
 
 from cosim.catalog import load
 from cosim.errors import ConfigurationError
+from cosim.machine.document import leaves
 from cosim.scenario import Param, ScenarioFile
 from cosim.timebase import NANOSECOND, UNITS_S
 from cosim.validate import shown
@@ -213,7 +214,8 @@ def run_one(scenario: str | ScenarioFile, spec: RunSpec) -> dict[str, Any]:
     row: dict[str, Any] = {"index": spec.index, "seed": spec.seed}
     try:
         script = load(scenario) if isinstance(scenario, str) else scenario
-        row.update({f"p.{k}": v for k, v in script.resolve(spec.overrides).items()})
+        # a machine file's values by their dotted keys (the ones --grid names), a scenario's by name
+        row.update({f"p.{k}": v for k, v in leaves(script.resolve(spec.overrides))})
         result = run_scenario(script, overrides=spec.overrides, seed=spec.seed)
     except Exception as exc:  # a broken run is a row, not the end of the sweep
         row.update({"verdict": "ERROR", "error": f"{type(exc).__name__}: {exc}", "_checks": []})

@@ -108,6 +108,61 @@ def test_a_signal_another_axis_has_may_still_be_declared_during_the_run(machine:
     assert "OK: a trio machine" in check_machine(load_machine(machine))
 
 
+POKEYS = """
+[machine]
+until = "100 ms"
+
+[controller]
+family = "pokeys"
+
+[[move]]
+target = [2000, 0, 0]
+
+[[check]]
+type = "PulsesPerWindow"
+signal = "pokeys.x.step"
+max_count = 25
+window = "1 ms"
+"""
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    # a PoKeys machine declares all its axes when it is built: an unknown one is not "another axis, later"
+    ('signal = "pokeys.x.step"', 'signal = "pokeys.q.step"',
+     r"t.toml: check\[0\].signal: no signal named 'pokeys.q.step' in this machine; did you mean"),
+    # a signal given as a list used to pass check-machine and break the check after the run (TypeError)
+    ('signal = "pokeys.x.step"', 'signal = ["pokeys.x.step"]',
+     r"t.toml: check\[0\].signal: a signal name is text, not \['pokeys.x.step'\]"),
+    ('type = "PulsesPerWindow"\nsignal = "pokeys.x.step"\nmax_count = 25\nwindow = "1 ms"',
+     'type = "EnergyPerLength"\nsignal = "pokeys.x.position"\npositions = "pokeys.x.position"\nlower = 0\nupper = 1',
+     r"t.toml: check\[0\]: EnergyPerLength\(pokeys.x.position\): positions = 'pokeys.x.position' is not allowed "
+     r"\(allowed: a list of position signals"),
+    # a signal of the wrong kind for its check or figure used to be found after the whole run (ERROR, exit 1;
+    # a figure's said "no signal named 'pokeys.x.step' ...; did you mean pokeys.x.step")
+    ('type = "PulsesPerWindow"\nsignal = "pokeys.x.step"\nmax_count = 25\nwindow = "1 ms"',
+     'type = "Bound"\nsignal = "pokeys.x.step"\nupper = 1',
+     r"t.toml: check\[0\]: Bound\(pokeys.x.step\): signal pokeys.x.step is a pulse signal; this check needs a bit "
+     r"or int or real signal"),
+    ('type = "PulsesPerWindow"\nsignal = "pokeys.x.step"', 'type = "PulsesPerWindow"\nsignal = "pokeys.x.position"',
+     r"t.toml: check\[0\]: PulsesPerWindow\(pokeys.x.position\): signal pokeys.x.position is a int signal; this "
+     r"check needs a pulse signal"),
+    ("[[check]]", '[[figure]]\nname = "peak"\nsignal = "pokeys.x.step"\nreduce = "max"\n\n[[check]]',
+     r"t.toml: figure\[0\].reduce: reduce = 'max' reads a value; pokeys.x.step is a pulse train \(use reduce = "
+     r"\"pulses\""),
+    ("[[check]]", '[[figure]]\nname = "net"\nsignal = "pokeys.x.position"\nreduce = "pulses"\n\n[[check]]',
+     r"t.toml: figure\[0\].reduce: reduce = 'pulses' counts the pulses of a pulse train; pokeys.x.position is a "
+     r"int signal"),
+])
+def test_check_machine_finds_a_signal_no_run_can_have(tmp_path: Path, old: str, new: str, message: str,
+                                                      capsys: pytest.CaptureFixture[str]) -> None:
+    machine = tmp_path / "t.toml"
+    machine.write_text(POKEYS.replace(old, new, 1))
+    assert main(["check-machine", str(machine)]) == 2
+    assert "Traceback" not in capsys.readouterr().err
+    with pytest.raises(ConfigurationError, match=message):
+        check_machine(load_machine(machine))
+
+
 @pytest.mark.fmu
 def test_until_given_by_set_is_checked_like_the_file(machine: Path, tmp_path: Path,
                                                      capsys: pytest.CaptureFixture[str]) -> None:

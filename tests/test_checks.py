@@ -94,7 +94,7 @@ def test_result_dict_has_exactly_the_runner_fields_in_plain_json_types() -> None
     assert data == {
         "name": "MinPulseSpacing(dev.x.step)", "outcome": "FAIL", "passed": False, "checked": 3, "n_violations": 1,
         "violations": [{"t_ns": 1400, "value": 400, "limit": 500,
-                        "detail": "pulse 2 only 400 ns after pulse 1 at 1000 ns"}],
+                        "detail": "pulse 2 only 400 ns after pulse 1 at 1000 ns", "unit": "ns"}],
         "measured": {"min_spacing_ns": 400}, "signal": STEP,
         "description": "dev.x.step: pulses at least 500 ns apart", "nothing_checked": "",
     }
@@ -405,7 +405,7 @@ def test_direction_setup_on_a_simulated_controller(sim: Simulation) -> None:
     sim.run(until=30_000)
     assert DirectionSetup(STEP, DIR, 2_000).evaluate(sim.trace).passed
     assert DirectionSetup(STEP, DIR, 3_000).evaluate(sim.trace).violations[0] == Violation(
-        12_000, 2_000, 3_000, "pulse 10: dev.x.dir changed to 0 at 10000 ns, only 2000 ns before")
+        12_000, 2_000, 3_000, "pulse 10: dev.x.dir changed to 0 at 10000 ns, only 2000 ns before", unit="ns")
 
 
 # -- EdgeAtPosition ----------------------------------------------------------------------------------
@@ -677,7 +677,7 @@ def test_checks_in_a_scenario_run_land_in_result_json(tmp_path: Path) -> None:
     assert result.verdict == "FAIL"
     data = json.loads((tmp_path / "out" / "result.json").read_text())
     assert data["checks"][0]["violations"] == [{"t_ns": 1_000_000, "value": 26, "limit": 25,
-                                                "detail": "26 pulses in [1000000, 2000000) ns"}]
+                                                "detail": "26 pulses in [1000000, 2000000) ns", "unit": "pulses"}]
     assert run_scenario(load(path)).verdict == "PASS"
 
 

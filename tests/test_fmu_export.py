@@ -318,3 +318,20 @@ def test_a_python_that_moved_is_found_again_on_the_path(tmp_path: Path, trio_fmu
     moved = _with_runtime(trio_fmu, tmp_path / "moved.fmu", libpython="/nonexistent/libpython3.11.so.1.0")
     columns, output = _ecos(moved, tmp_path / "ecos", stop_s=0.01, step_s=1e-3)
     assert len(columns.get("x_steps", [])) >= 10, output
+
+
+def test_a_pmac_machine_carries_its_setup_files(tmp_path: Path) -> None:
+    """controller.setup names PMAC files read at power-up: they were left out of the FMU, so the export of
+    the flying shear failed ('setup.pmc does not exist' in the FMU's resources)."""
+    shear = ROOT / "examples" / "pmac_flying_shear"
+    for name in ("shear.toml", "setup.pmc", "shear.pmc", "arm.pmc"):
+        shutil.copy(shear / name, tmp_path / name)
+    machine = tmp_path / "shear.toml"
+    machine.write_text(machine.read_text() + '\n[export]\noutputs = ["pmac.motor1.cmd_pos"]\n')
+    fmu = export_fmu(machine, tmp_path / "shear.fmu", portable=False).path  # runs it from its resources first
+    with zipfile.ZipFile(fmu) as archive:
+        carried = [name for name in archive.namelist() if name.endswith(".pmc")]
+        assert archive.read("resources/cosim/machine/setup/0_setup.pmc") == (shear / "setup.pmc").read_bytes()
+    assert sorted(carried) == ["resources/cosim/machine/programs/0_shear.pmc",
+                               "resources/cosim/machine/programs/1_arm.pmc",
+                               "resources/cosim/machine/setup/0_setup.pmc"]

@@ -106,6 +106,10 @@ def test_a_table_times_are_exact_ticks_and_its_values_are_checked_by_type(tmp_pa
                                       "false)"),
     ("time,Int32_input\n0,1,2\n", "inputs.csv:2: 3 cells where the header has 2"),
     ("time,Int32_input\nsoon,1\n", "inputs.csv:2: time 'soon' is not a number of seconds"),
+    # nan and inf used to reach the FMU, which refused them as the run started: ERROR, exit 1
+    ("time,Float64_continuous_input\n0,0\n1,nan\n", "inputs.csv:3: Float64_continuous_input = 'nan' is not "
+                                                     "allowed (allowed: any finite number)"),
+    ("time,Float64_discrete_input\n0,-inf\n", "inputs.csv:2: Float64_discrete_input = '-inf' is not allowed"),
 ])
 def test_a_bad_table_is_refused_with_its_file_line_column_and_what_is_allowed(
         tmp_path: Path, text: str, message: str, capsys: pytest.CaptureFixture[str]) -> None:
@@ -121,6 +125,10 @@ def test_a_missing_table_and_an_input_given_twice_are_refused(tmp_path: Path,
     fmu = str(ensure_fmu("FeedthroughTest", 3))
     assert main(["run-fmu", fmu, "--input", str(tmp_path / "none.csv"), "--out", str(tmp_path / "out")]) == 2
     assert f"--input: input table {tmp_path / 'none.csv'} does not exist" in capsys.readouterr().err
+    assert main(["run-fmu", fmu, "--input", str(tmp_path), "--out", str(tmp_path / "out")]) == 2
+    assert f"--input: input table {tmp_path} is not a file" in capsys.readouterr().err  # not "does not exist"
+    assert main(["run-fmu", fmu, "--set", "Float64_continuous_input=nan", "--out", str(tmp_path / "out")]) == 2
+    assert "Float64_continuous_input = 'nan' is not allowed (allowed: any finite number)" in capsys.readouterr().err
     table = write(tmp_path, "time,Int32_input\n0,1\n")
     assert main(["run-fmu", fmu, "--input", str(table), "--set", "Int32_input=2", "--out", str(tmp_path / "out")]) == 2
     assert "--set and --input both give Int32_input" in capsys.readouterr().err

@@ -140,3 +140,34 @@ def test_set_writes_a_new_key_by_its_whole_dotted_path(trio_machine: Path) -> No
     assert values["controller"]["axis"] == {"3": {"SPEED": 500}} and values["machine"]["until"] == "2 s"
     with pytest.raises(ConfigurationError, match=r"--set SPED: the machine file has no key 'SPED'"):
         machine.resolve({"SPED": "500"})
+
+
+def test_set_reaches_a_key_of_an_array_of_tables_by_the_name_params_shows(trio_machine: Path) -> None:
+    """`cosim params` lists check[0].tol_counts ("set any with --set"): --set used to refuse it (no key)."""
+    machine = load_machine(trio_machine)
+    assert "check[0].tol_counts" in [p.name for p in machine.parameters]  # what params and sweeps offer
+    assert machine.resolve({"check[0].tol_counts": "2"})["check"][0]["tol_counts"] == 2
+    assert machine.resolve({"tol_counts": "3"})["check"][0]["tol_counts"] == 3  # a unique last part, as elsewhere
+    named = machine.resolve({"check[0].name": '"gate edges"'})  # a new key of a table that is there
+    assert named["check"][0]["name"] == "gate edges"
+    assert machine.document["check"][0]["tol_counts"] == 0  # the file's own document is not changed
+    with pytest.raises(ConfigurationError, match=r"--set check\[3\].tol_counts: the machine file has no key"):
+        machine.resolve({"check[3].tol_counts": "1"})
+    # a last part found in a table and in an array of tables means the table's, as before arrays were reachable
+    trio_machine.write_text(TRIO + '\n[[check]]\ntype = "IntervalsAbove"\nsignal = "trio.wdog"\nlimit = 0\n'
+                                   'until = "1 ms"\n')
+    assert load_machine(trio_machine).resolve({"until": '"2 s"'})["machine"]["until"] == "2 s"
+
+
+@pytest.mark.parametrize("example", ["trio_tn20_81_fmu/tn20_81.toml", "pokeys_mill/mill.toml"])
+def test_a_trio_or_pokeys_machine_does_not_import_the_pmac_servo_design(example: str) -> None:
+    """python-control (and with it scipy and matplotlib) was imported by every machine build: seconds of
+    start-up, and 60 MB of wheels in every exported FMU (docs/export.md: 'numpy is the largest')."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom cosim.machine import load_machine\nfrom cosim.machine.check import check_machine\n"
+            f"check_machine(load_machine({str(EXAMPLES / example)!r}))\n"
+            "print(sorted(m for m in ('control', 'scipy', 'matplotlib') if m in sys.modules))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]"

@@ -26,7 +26,7 @@ from cosim.report.levels import SideFiles, train_levels, value_levels
 from cosim.report.rows import named_signals, reader_order, records, reduce_min_max, train_row, value_row
 from cosim.report.text import humanize_ns, rst_html, state_names, time_text, value_text
 from cosim.report.verdicts import VERDICTS, badge
-from cosim.report.waveform import Marked, initial_window, violation_unit, violations_of
+from cosim.report.waveform import Marked, initial_window, violation_text, violation_unit, violations_of
 from cosim.trace import Trace
 
 
@@ -218,6 +218,35 @@ def test_a_violation_is_in_the_unit_of_its_signal_or_of_the_duration_it_measured
     low = {"t_ns": 5, "value": 0, "limit": 1, "detail": "pokeys.buffer_level = 0 below 1"}
     assert violation_unit(level, low, {"pokeys.buffer_level": "slots"}) == "slots"
     assert violation_unit(level, {**low, "unit": "mm"}, {}) == "mm"  # a violation that says its unit
+
+
+def test_each_check_says_the_unit_of_its_violations_and_the_report_uses_it() -> None:
+    """The report used to guess the unit from the detail text: 0.3 J/mm of a laser read as "0.3 J", and a
+    rate in pulses per second as a bare number. Each check now writes the unit of its value and limit."""
+    from cosim.checks import Bound, EnergyPerLength, MaxPulseRate, PulsesPerWindow
+
+    trace = Trace()
+    trace.declare("laser.energy", "real", unit="J")
+    trace.declare("head.x", "real", unit="mm")
+    trace.declare("pokeys.x.step", "pulse")
+    for t, energy, x in [(0, 0.0, 0.0), (1_000_000, 0.3, 1.0), (2_000_000, 0.6, 2.0)]:  # 0.3 J per mm
+        trace.record("laser.energy", t, energy)
+        trace.record("head.x", t, x)
+    for k in range(30):  # 30 pulses 10 us apart in the first 1 ms: 100 kHz
+        trace.record_pulse("pokeys.x.step", k * 10_000, 1)
+    trace.end_t = 2_000_000
+    units = {"laser.energy": "J", "head.x": "mm"}
+    said = {}
+    for check in (EnergyPerLength("laser.energy", ["head.x"], lower=0.36, upper=0.44),
+                  Bound("head.x", upper=1.5), PulsesPerWindow("pokeys.x.step", 25, 1_000_000),
+                  MaxPulseRate("pokeys.x.step", 25_000)):
+        found = check.evaluate(trace).to_dict()
+        violation = found["violations"][0]
+        said[type(check).__name__] = (violation["unit"], *violation_text(found, violation, units))
+    assert said == {"EnergyPerLength": ("J/mm", "0.3 J/mm", "0.36..0.44 J/mm"),
+                    "Bound": ("mm", "2 mm", "1.5 mm"),
+                    "PulsesPerWindow": ("pulses", "30 pulses", "25 pulses"),
+                    "MaxPulseRate": ("Hz", "100,000 Hz", "25,000 Hz")}
 
 
 def test_the_view_opens_around_the_first_violation_else_on_the_whole_run() -> None:

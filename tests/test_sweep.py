@@ -194,3 +194,40 @@ def test_hazard_runs_have_their_verdicts_per_check_and_only_a_missed_hazard_is_a
     assert table["failed"].tolist() == ["c1", ""]
     assert reasons(table) == ["run 0 (x=1): HAZARD MISSED  c1 x at most 2 (a deliberately long check name) "
                               "(HAZARD MISSED: 0 violations)"]
+
+
+MACHINE = """
+[machine]
+until = "20 ms"
+
+[controller]
+family = "pokeys"
+[controller.axis.x]
+max_speed_hz = 10000
+accel = 10000000
+
+[[move]]
+target = [100, 0, 0]
+
+[[check]]
+type = "PulsesPerWindow"
+signal = "pokeys.x.step"
+max_count = 25
+window = "1 ms"
+"""
+
+
+def test_a_machine_file_sweep_has_a_column_per_swept_key(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The swept key was missing from the table (whole tables as p.controller, ...) and the runs read 'run 0 ()'."""
+    machine = tmp_path / "m.toml"
+    machine.write_text(MACHINE)
+    runs = plan(str(machine), grid={"controller.axis.x.max_speed_hz": ["5000", "10000"],
+                                    "check[0].max_count": ["6", "25"]})
+    table = sweep(str(machine), runs, workers=0, progress=False)
+    assert table["p.controller.axis.x.max_speed_hz"].tolist() == [5000, 5000, 10000, 10000]
+    assert table["p.check[0].max_count"].tolist() == [6, 25, 6, 25]
+    assert table["verdict"].tolist() == ["PASS", "PASS", "FAIL", "PASS"]  # 5 or 10 pulses a 1 ms slot vs 6
+    assert "p.controller" not in table.columns
+    assert main(["sweep", str(machine), "--grid", "check[0].max_count=5", "--workers", "0", "--no-report",
+                 "--out", str(tmp_path / "o")]) == 0  # a FAIL is a result of the sweep, not a broken run
+    assert "run 0 (check[0].max_count=5): FAIL" in capsys.readouterr().out

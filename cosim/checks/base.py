@@ -99,22 +99,28 @@ class Check:
         """The name used in results and error messages."""
         return self.name or f"{type(self).__name__}({self.main_signal})"
 
-    def signals(self) -> dict[str, str]:
+    def signals(self) -> dict[str, object]:
         """The signals the check reads, by the parameter that names each (to check them before a run).
 
         A parameter names a signal when it is called ``signal``, ``*_signal``, ``step``,
         ``direction`` or ``gate`` (a list: ``positions``), or is an event reference (``start``,
-        ``end``: :class:`~cosim.checks.EdgeRef`, :class:`~cosim.checks.PulseRef`).
+        ``end``: :class:`~cosim.checks.EdgeRef`, :class:`~cosim.checks.PulseRef`). A value that is
+        not a name (a list where one name goes, a name where a list goes) is returned as it is, for
+        the caller to refuse.
         """
-        out: dict[str, str] = {}
+        out: dict[str, object] = {}
         for item in fields(self):
             value = getattr(self, item.name)
             if isinstance(getattr(value, "signal", None), str):
                 out[f"{item.name}.signal"] = value.signal
-            elif isinstance(value, str) and (item.name in SIGNAL_FIELDS or item.name.endswith("_signal")):
-                out[item.name] = value
-            elif item.name in SIGNAL_LISTS and isinstance(value, list | tuple):
-                out.update({f"{item.name}[{i}]": v for i, v in enumerate(value) if isinstance(v, str)})
+            elif item.name in SIGNAL_FIELDS or item.name.endswith("_signal"):
+                if value is not None:  # an optional one not given
+                    out[item.name] = value
+            elif item.name in SIGNAL_LISTS:
+                if isinstance(value, list | tuple):
+                    out.update({f"{item.name}[{i}]": v for i, v in enumerate(value)})
+                else:
+                    out[item.name] = value
         return out
 
     def evaluate(self, trace: Trace) -> CheckResult:
@@ -178,6 +184,12 @@ def records(trace: Trace, name: str, check: Check) -> tuple[Ints, Floats]:
     """``(t, value)`` of a bit/int/real signal: every recorded change or sample."""
     _require_kind(trace, name, VALUE_KINDS, check)
     return trace.edges(name)
+
+
+def unit_of(trace: Trace, name: str) -> str:
+    """The unit ``name`` was declared with (``""`` when it has none or is not in the trace)."""
+    info = trace.info.get(name)
+    return info.unit if info is not None else ""
 
 
 def changes(t: Ints, v: Floats) -> tuple[Ints, Floats]:

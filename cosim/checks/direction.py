@@ -123,7 +123,7 @@ class DirectionSetup(Check):
         t_ns, setup_ns = clock.t_ns(t[i]), clock.ns(self.setup)
         k = base + i  # the pulse's index in the train
         if undefined[i]:
-            return Violation(t_ns, 0, setup_ns, f"pulse {k}: {self.direction} has no value yet")
+            return Violation(t_ns, 0, setup_ns, f"pulse {k}: {self.direction} has no value yet", unit="ns")
         needed = int(d[i]) if self.positive_level == 1 else 1 - int(d[i])
         wrong = f"; pulse dir {d[i]} needs level {needed}, level is {level[i]}" if mismatch[i] else ""
         if short[i]:
@@ -131,5 +131,6 @@ class DirectionSetup(Check):
             changed_at = clock.t_ns(t[i] - age[i])
             return Violation(t_ns, since, setup_ns,
                              f"pulse {k}: {self.direction} changed to {level[i]} at "
-                             f"{changed_at} ns, only {fmt(since)} ns before{wrong}")
-        return Violation(t_ns, int(level[i]), needed, f"pulse {k}: dir {d[i]} but {self.direction} is {level[i]}")
+                             f"{changed_at} ns, only {fmt(since)} ns before{wrong}", unit="ns")
+        return Violation(t_ns, int(level[i]), needed, f"pulse {k}: dir {d[i]} but {self.direction} is {level[i]}",
+                         unit="")  # levels

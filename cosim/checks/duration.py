@@ -251,14 +251,16 @@ class Duration(Check):
             t0 = clock.t_ns(starts[i])
             length = clock.ns(d[i])
             if not has_end[i]:
-                found.violations.append(Violation(t0, length, rule, f"no {self.end} within {fmt(length)} ns"))
+                found.violations.append(Violation(t0, length, rule, f"no {self.end} within {fmt(length)} ns",
+                                                  unit="ns"))
                 continue
             limit: Number | str = rule
             if too_short[i] and self.min is not None:
                 limit = clock.ns(self.min)
             elif too_long[i] and self.max is not None:
                 limit = clock.ns(self.max)
-            found.violations.append(Violation(t0, length, limit, f"{self.end} {fmt(length)} ns after the start"))
+            found.violations.append(Violation(t0, length, limit, f"{self.end} {fmt(length)} ns after the start",
+                                              unit="ns"))
         lengths = d[has_end]
         if lengths.size:
             if measured:

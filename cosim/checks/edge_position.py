@@ -125,7 +125,7 @@ class EdgeAtPosition(Check):
         for j in np.flatnonzero(extra):
             p = "unknown" if np.isnan(pos[j]) else fmt(pos[j])
             found.violations.append(Violation(clock.t_ns(te[j]), as_number(pos[j]), "no edge",
-                                              f"unexpected edge to {level[j]} at position {p}"))
+                                              f"unexpected edge to {level[j]} at position {p}", unit="counts"))
         n_bad = int((~matched).sum() + extra.sum())
         k_hit = [int(k) for k in np.flatnonzero(matched)]
         if k_hit:
@@ -141,7 +141,7 @@ class EdgeAtPosition(Check):
                 found.violations.append(Violation(
                     clock.t_ns(te[match[k]]), clock.ns(err[i]), clock.ns(self.tol_time),
                     f"edge {k} to {self.expected[k][1]} {fmt(clock.ns(err[i]))} ns off its expected time "
-                    f"{clock.t_ns(self.times[k])} ns"))
+                    f"{clock.t_ns(self.times[k])} ns", unit="ns"))
         found.n_violations = n_bad
         found.violations = sorted(found.violations, key=lambda v: v.t_ns)[:MAX_REPORTED]
         found.measured["edges_expected"] = len(self.expected)
@@ -173,4 +173,4 @@ class EdgeAtPosition(Check):
             t_ns = clock.t_ns(te[before[-1]]) if before.size else 0
         return Violation(t_ns, position, f"edge to {value} at {position} ± {self.tol_counts} counts",
                          f"missing edge {k}: no change to {value} within ±{self.tol_counts} counts of "
-                         f"position {position}")
+                         f"position {position}", unit="counts")

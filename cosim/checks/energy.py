@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cosim import validate
-from cosim.checks.base import Check, Clock, Findings, fmt, held_index, records
+from cosim.checks.base import Check, Clock, Findings, fmt, held_index, records, unit_of
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.errors import ConfigurationError
 
@@ -60,6 +60,9 @@ class EnergyPerLength(Check):
         validate.finite(self.lower, "lower", where=self.where)
         validate.finite(self.upper, "upper", where=self.where)
         validate.positive(self.window, "window", unit="units", where=self.where)
+        if isinstance(self.positions, str) or not isinstance(self.positions, Sequence):
+            raise ConfigurationError.out_of_range("positions", self.positions, "a list of position signals, e.g. "
+                                                  "[\"trio.axis3.dpos\", \"trio.axis2.dpos\"]", where=self.where)
         if not self.positions:
             raise ConfigurationError.out_of_range("positions", list(self.positions), "one or more position signals",
                                                   where=self.where)
@@ -103,7 +106,8 @@ class EnergyPerLength(Check):
                           "max_j_per_unit": float(values.max()), "mean_j_per_unit": float(values.mean())}
         bad = [(k, r) for k, r in ratios if not self.lower <= r <= self.upper]
         found.n_violations = len(bad)
+        unit = f"{unit_of(trace, self.signal) or 'J'}/{unit_of(trace, self.positions[0]) or 'unit'}"  # J/mm
         for k, r in bad[:MAX_REPORTED]:
             found.violations.append(Violation(clock.t_ns(t[k]), r, f"{fmt(self.lower)}..{fmt(self.upper)}",
-                                              f"{fmt(r)} J per unit over the window ending here"))
+                                              f"{fmt(r)} J per unit over the window ending here", unit=unit))
         return found

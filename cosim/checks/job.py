@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cosim import validate
-from cosim.checks.base import Check, Clock, Findings, records
+from cosim.checks.base import Check, Clock, Findings, records, unit_of
 from cosim.checks.result import Violation
 from cosim.job import ENDED, JobState
 
@@ -107,7 +107,8 @@ class JobCompleted(Check):
         if reason:
             detail += f": {reason}"
         found.n_violations = 1
-        found.violations.append(Violation(clock.t_ns(at), int(state), int(expected), detail))
+        found.violations.append(Violation(clock.t_ns(at), int(state), int(expected), detail,
+                                          unit=unit_of(trace, self.signal)))  # states, named by the signal
         return found
 
 

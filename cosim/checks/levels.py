@@ -26,6 +26,7 @@ from cosim.checks.base import (
     pulse_chunks,
     record_chunks,
     signed_position,
+    unit_of,
 )
 from cosim.checks.result import MAX_REPORTED, Violation
 from cosim.errors import ConfigurationError
@@ -84,7 +85,8 @@ class Bound(Check):
                     limit, side = self.upper, "is above the upper bound"
                 found.violations.append(Violation(clock.t_ns(t[i]), as_number(v[i]),
                                                   limit if isinstance(limit, str) else as_number(limit),
-                                                  f"{self.signal} = {fmt(v[i])} {side}"))
+                                                  f"{self.signal} = {fmt(v[i])} {side}",
+                                                  unit=unit_of(trace, self.signal)))
             finite = v[~np.isnan(v)]
             if finite.size:
                 top, bottom = np.fmax(top, finite.max()), np.fmin(bottom, finite.min())
@@ -129,7 +131,7 @@ class _Intervals(Check):
                 found.violations.append(Violation(
                     clock.t_ns(t_start[i]), clock.ns(length[i]), limit,
                     f"{signal} {sign} {fmt(threshold)} from {clock.t_ns(t_start[i])} to {clock.t_ns(t_stop[i])} ns "
-                    f"({'lowest' if below else 'highest'} {fmt(extreme[i])}{tail})"))
+                    f"({'lowest' if below else 'highest'} {fmt(extreme[i])}{tail})", unit="ns"))
             totals["intervals"] += hits.size
             totals["total"] += int(length[bad].sum())
             if hits.size:
@@ -345,7 +347,8 @@ class ValueAt(Check):
         if found.checked and not abs(value - self.expected) <= self.tol:
             found.n_violations = 1
             found.violations.append(Violation(clock.t_ns(at), as_number(value), limit,
-                                              f"{what} of {self.signal} is {fmt(value)}, expected {limit}"))
+                                              f"{what} of {self.signal} is {fmt(value)}, expected {limit}",
+                                              unit=unit_of(trace, self.signal)))
         if not np.isnan(value):
             found.measured["value"] = as_number(value)
         return found

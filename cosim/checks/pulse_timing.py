@@ -89,7 +89,8 @@ class MinPulseSpacing(Check):
                 gap = clock.ns(gaps[i])
                 found.violations.append(Violation(
                     clock.t_ns(t[i + 1]), gap, limit,
-                    f"pulse {base + i + 1} only {fmt(gap)} ns after pulse {base + i} at {clock.t_ns(t[i])} ns"))
+                    f"pulse {base + i + 1} only {fmt(gap)} ns after pulse {base + i} at {clock.t_ns(t[i])} ns",
+                    unit="ns"))
             if gaps.size:
                 smallest = int(gaps.min()) if smallest is None else min(smallest, int(gaps.min()))
         if smallest is not None:
@@ -154,7 +155,7 @@ class MaxPulseRate(Check):
                 found.violations.append(Violation(
                     clock.t_ns(t[i + 1]), _rate_hz(1, int(gaps[i]), clock), limit,
                     f"pulse {base + i + 1} {fmt(clock.ns(gaps[i]))} ns after the one before "
-                    f"(at least {fmt(clock.ns(min_gap))} ns needed)"))
+                    f"(at least {fmt(clock.ns(min_gap))} ns needed)", unit="Hz"))
             if gaps.size:
                 smallest = int(gaps.min()) if smallest is None else min(smallest, int(gaps.min()))
         if smallest is not None:
@@ -180,7 +181,7 @@ class MaxPulseRate(Check):
                 start = clock.t_ns(pending[i])
                 found.violations.append(Violation(
                     start, _rate_hz(int(counts[i]), window, clock), limit,
-                    f"{counts[i]} pulses in [{start}, {start + w_ns}) ns, at most {most} allowed"))
+                    f"{counts[i]} pulses in [{start}, {start + w_ns}) ns, at most {most} allowed", unit="Hz"))
             if counts.size:
                 fullest = max(fullest, int(counts.max()))
 
@@ -246,7 +247,8 @@ class PulsesPerWindow(Check):
                 begin = self.start + int(k[i]) * self.window
                 found.violations.append(Violation(
                     clock.t_ns(begin), int(counts[i]), self.max_count,
-                    f"{counts[i]} pulses in [{clock.t_ns(begin)}, {clock.t_ns(begin + self.window)}) ns"))
+                    f"{counts[i]} pulses in [{clock.t_ns(begin)}, {clock.t_ns(begin + self.window)}) ns",
+                    unit="pulses"))
             if counts.size:
                 fullest, windows = max(fullest, int(counts.max())), windows + counts.size
 

@@ -4,7 +4,7 @@ The runner stores :meth:`CheckResult.to_dict` in ``result.json``; its shape is f
 
     {"name": str, "outcome": "PASS" | "FAIL" | "UNCHECKED", "passed": bool, "checked": int,
      "n_violations": int,
-     "violations": [{"t_ns": int, "value": number, "limit": number | str, "detail": str}, ...],
+     "violations": [{"t_ns": int, "value": number, "limit": number | str, "detail": str, "unit": str}, ...],
      "measured": {figure: number, ...}, "signal": str, "description": str, "nothing_checked": str}
 
 The outcome: ``FAIL`` when there was a violation, else ``UNCHECKED`` when the check examined
@@ -13,7 +13,9 @@ An ``UNCHECKED`` check neither passed nor failed (``passed`` is false, ``n_viola
 ``nothing_checked`` says why (e.g. ``signal pokeys.x.step had no data: nothing was checked``).
 
 ``violations`` holds the first :data:`MAX_REPORTED` violations in time order; ``n_violations``
-counts all of them.
+counts all of them. A violation's ``unit`` is the unit of its value and of a number limit (``ns``
+for a time or a duration, ``Hz``, ``pulses``, the unit of the signal whose value it is; ``""``
+for a bare number or a state); a check that does not say leaves it out.
 """
 
 from __future__ import annotations
@@ -55,17 +57,23 @@ class Violation:
         What was allowed (a number in the same unit, or a short rule such as ``'never < 1'``).
     detail : str
         One line for humans.
+    unit : str, optional
+        The unit of ``value`` and of a number ``limit`` (``"ns"``, ``"Hz"``, ``"pulses"``, the
+        signal's unit; ``""``: a bare number or a state). None: not said (left out of the dict).
     """
 
     t_ns: int
     value: Number
     limit: Number | str
     detail: str = ""
+    unit: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The violation as a JSON-ready dict."""
-        return {"t_ns": int(self.t_ns), "value": plain(self.value), "limit": plain(self.limit),
-                "detail": self.detail}
+        out = {"t_ns": int(self.t_ns), "value": plain(self.value), "limit": plain(self.limit), "detail": self.detail}
+        if self.unit is not None:
+            out["unit"] = self.unit
+        return out
 
 
 @dataclass(frozen=True)

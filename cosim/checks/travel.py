@@ -115,7 +115,8 @@ class Travel(Check):
             value = as_number(round(farthest / float(self.scale), 9))
             found.violations.append(Violation(
                 clock.t_ns(int(t)), value, as_number(bound),
-                f"{self.signal} went {'past' if side > 0 else 'below'} {fmt(bound)}{unit}, to {fmt(value)}{unit}"))
+                f"{self.signal} went {'past' if side > 0 else 'below'} {fmt(bound)}{unit}, to {fmt(value)}{unit}",
+                unit=self.unit))
 
     def _positions(self, trace: Trace) -> Iterator[tuple[Ints, Floats]]:
         info = trace.info.get(self.signal)

@@ -5,7 +5,8 @@ An exported FMU holds::
     modelDescription.xml                FMI 3.0 (or 2.0) co-simulation; time is value reference 0
     binaries/<platform>/<id>.so         the C entry point (fmu_src/export/), the same for every machine
     resources/cosim/machine.json        the machine document, its variables, the instantiation token
-    resources/cosim/machine/...         the programs (and the plants' own FMUs) the document names
+    resources/cosim/machine/...         the programs, a PMAC's setup files (and the plants' own FMUs) the
+                                        document names
     resources/cosim/runtime.txt         the Python runtime it needs: libpython, PYTHONHOME, site folders
     documentation/index.html            what it is, and what it needs to run
 
@@ -45,7 +46,7 @@ BINARY = "cosim_machine"
 #: A fixed namespace for the instantiation tokens (uuid5 of the FMU's content).
 TOKEN_NAMESPACE = uuid.UUID("0b5e6c1e-2c47-4f3e-9a55-6d0c5e3a1f23")
 #: The machine file's keys that name files, copied into the FMU (relative to the machine file).
-FILE_KEYS = ("program[].file", "plant.NAME.fmu", "plant.NAME.input")
+FILE_KEYS = ("program[].file", "controller.setup", "plant.NAME.fmu", "plant.NAME.input")
 
 
 @dataclass(frozen=True)
@@ -179,6 +180,16 @@ def _relocated(values: dict[str, Any], *, base: Path, plants: str) -> tuple[dict
             target = f"programs/{i}_{source.name}"
             files[target] = source
             program["file"] = target
+    controller = document.get("controller")
+    setup = controller.get("setup") if isinstance(controller, dict) else None  # a PMAC's files read at power-up
+    if isinstance(setup, str | list):
+        names = [setup] if isinstance(setup, str) else setup
+        for i, name in enumerate(names):
+            if isinstance(name, str):
+                source = (base / name).resolve()
+                names[i] = f"setup/{i}_{source.name}"
+                files[names[i]] = source
+        controller["setup"] = names
     if plants == "inside":
         for name, plant in document.get("plant", {}).items():
             if not isinstance(plant, dict):

@@ -43,7 +43,7 @@ from typing import Any
 
 from cosim import validate
 from cosim.errors import ConfigurationError
-from cosim.machine.document import Table, apply_overrides, read_document
+from cosim.machine.document import Table, apply_overrides, leaves, read_document
 from cosim.scenario import Param, Run, ScenarioFile
 from cosim.timebase import TimeBase
 
@@ -102,7 +102,7 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
     if not isinstance(name, str) or not name:
         raise ConfigurationError.out_of_range("machine.name", name, "a non-empty string", where=str(path))
     description = machine.get("description", "")
-    parameters = tuple(Param(key, value) for key, value in _leaves(document)
+    parameters = tuple(Param(key, value) for key, value in leaves(document)
                        if isinstance(value, bool | int | float | str))
 
     def build(run: Run) -> None:
@@ -157,13 +157,3 @@ def _finite(data: Any, path: Path, key: str = "") -> None:
     elif isinstance(data, list):
         for index, value in enumerate(data):
             _finite(value, path, f"{key}[{index}]")
-
-
-def _leaves(data: Mapping[str, Any], prefix: str = "") -> list[tuple[str, Any]]:
-    out: list[tuple[str, Any]] = []
-    for key, value in data.items():
-        if isinstance(value, dict):
-            out += _leaves(value, f"{prefix}{key}.")
-        else:
-            out.append((f"{prefix}{key}", value))
-    return out

@@ -57,6 +57,7 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
         shows = table.text("hazard", None)  # a declared hazard: the check is expected to fail
         check, where = check_from_table(table), f"{table.file}: {table.path}"
         _signals_known(table, check.signals(), trace, plants)
+        _kinds_fit(table, check, trace)
         if shows is None:
             run.check(check, where=where)
         else:
@@ -66,6 +67,7 @@ def build_machine(run: Run, document: Table, *, base: Path) -> Any:
         name, value, unit = figure_from_table(table, plants)
         if table.has("signal"):
             _signals_known(table, {"signal": table.data["signal"]}, trace, plants)
+            _figure_kind_fits(table, trace)
         run.figure(name, lambda value=value: value(trace), unit,  # type: ignore[misc]
                    where=f"{table.file}: {table.path}")
     declare_warnings(run, couplings)
@@ -79,6 +81,36 @@ def _signals_known(table: Table, names: dict[str, Any], trace: Any, plants: dict
         problem = signal_problem(trace, name, plants)
         if problem is not None:
             raise ConfigurationError(f"{table.file}: {table.key(key)}: {problem}")
+
+
+def _kinds_fit(table: Table, check: Any, trace: Any) -> None:
+    """Refuse a check that reads a signal of the wrong kind (a pulse train where a value goes), before the run.
+
+    The check is evaluated on the trace as built (its signals declared, nothing simulated): a check
+    reads each signal through readers that refuse the wrong kind (:func:`cosim.checks.base.records`),
+    so that refusal comes now instead of after the run. Anything else it finds in an empty trace
+    (nothing examined, a signal still to be declared) is for after the run.
+    """
+    try:
+        check.evaluate(trace)
+    except ConfigurationError as exc:
+        raise ConfigurationError(f"{table.file}: {table.path}: {exc}") from None
+    except Exception:  # the run evaluates it again and reports what it finds then
+        return
+
+
+def _figure_kind_fits(table: Table, trace: Any) -> None:
+    """Refuse a figure whose ``reduce`` cannot read its signal's kind (``pulses`` of a value, ``max`` of a train)."""
+    name, reduce = table.data["signal"], table.data.get("reduce", "last")
+    info = trace.info.get(name) if isinstance(name, str) else None
+    if info is None:
+        return
+    if reduce == "pulses" and info.kind != "pulse":
+        raise ConfigurationError(f"{table.file}: {table.key('reduce')}: reduce = 'pulses' counts the pulses of a "
+                                 f"pulse train; {name} is a {info.kind} signal (use last, max, min or changes)")
+    if reduce != "pulses" and info.kind == "pulse":
+        raise ConfigurationError(f"{table.file}: {table.key('reduce')}: reduce = {reduce!r} reads a value; {name} "
+                                 "is a pulse train (use reduce = \"pulses\": its net signed count)")
 
 
 def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,

@@ -10,10 +10,11 @@ Keys are taken with typed getters (:meth:`Table.text`, :meth:`Table.integer`, :m
 never silently ignored).
 
 ``--set KEY=VALUE`` (:func:`apply_overrides`) addresses a key by its dotted path
-(``controller.axis.3.SPEED=2000``) or by any unique trailing part of a path already in the file
-(``SPEED=2000`` when only one table has a SPEED); the value is read as a TOML value (``2000``,
-``true``, ``"2 s"``, ``[1, 2]``), and text that is not a TOML value is taken as a string
-(``--set until=2 s``).
+(``controller.axis.3.SPEED=2000``, ``check[0].max_count=20`` in an array of tables) or by any
+unique trailing part of a path already in the file (``SPEED=2000`` when only one table has a
+SPEED; the tables outside arrays are looked in first, so ``until`` stays ``machine.until``); the
+value is read as a TOML value (``2000``, ``true``, ``"2 s"``, ``[1, 2]``), and text that is not a
+TOML value is taken as a string (``--set until=2 s``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from __future__ import annotations
 import difflib
 import re
 import tomllib
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from fractions import Fraction
@@ -90,13 +91,18 @@ def machine_description(path: Path) -> str:
     return str(text).strip().splitlines()[0] if str(text).strip() else ""
 
 
-def _leaves(data: dict[str, Any], prefix: str = "") -> Iterator[str]:
+def leaves(data: Mapping[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
+    """Every key of a document with its value, by its dotted path as messages name it: tables by name,
+    arrays of tables by index (``controller.axis.x.accel``, ``check[0].max_count``)."""
     for key, value in data.items():
         path = f"{prefix}{key}"
         if isinstance(value, dict):
-            yield from _leaves(value, path + ".")
+            yield from leaves(value, path + ".")
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            for index, item in enumerate(value):
+                yield from leaves(item, f"{path}[{index}].")
         else:
-            yield path
+            yield path, value
 
 
 def _value(text: str) -> Any:
@@ -111,35 +117,55 @@ def apply_overrides(data: dict[str, Any], overrides: dict[str, Any], *, file: Pa
     import copy
 
     out = copy.deepcopy(data)
-    leaves = list(_leaves(data))
+    paths = [path for path, _ in leaves(data)]
+    tables = [path for path in paths if "[" not in path]  # a trailing part is looked up here first
     for key, raw in overrides.items():
         value = _value(raw) if isinstance(raw, str) else raw
-        path = key if "." in key and (key in leaves or _creatable(out, key)) else None
+        path = key if key in paths or ("." in key and _creatable(out, key)) else None
         if path is None:
-            matches = [leaf for leaf in leaves if leaf == key or leaf.endswith("." + key)]
+            matches = [leaf for leaf in tables if leaf == key or leaf.endswith("." + key)] or [
+                leaf for leaf in paths if leaf.endswith("." + key)]
             if len(matches) > 1:
                 raise ConfigurationError(f"{file}: --set {key} is ambiguous: it could be {', '.join(matches)}; "
                                          "write the whole dotted key")
             if not matches:
-                close = difflib.get_close_matches(key, leaves, n=3, cutoff=0.5)
+                close = difflib.get_close_matches(key, paths, n=3, cutoff=0.5)
                 hint = f"; did you mean {', '.join(close)}?" if close else ""
                 raise ConfigurationError(f"{file}: --set {key}: the machine file has no key {key!r}{hint} "
                                          "(a new key is written as its whole dotted path, e.g. "
                                          "controller.axis.3.SPEED)")
             path = matches[0]
-        *tables, leaf = path.split(".")
+        *parents, leaf = path.split(".")
         node = out
-        for part in tables:
-            node = node.setdefault(part, {})
+        for part in parents:
+            name, index = _indexed(part)
+            try:
+                node = node.setdefault(name, {}) if index is None else node[name][index]
+            except (KeyError, IndexError, TypeError):
+                raise ConfigurationError(f"{file}: --set {key}: the machine file has no table {part}") from None
             if not isinstance(node, dict):
                 raise ConfigurationError(f"{file}: --set {key}: {part} is a value, not a table")
         node[leaf] = value
     return out
 
 
+_INDEXED = re.compile(r"(.+)\[(\d+)\]")
+
+
+def _indexed(part: str) -> tuple[str, int | None]:
+    """``check[0]`` -> ``("check", 0)``; ``axis`` -> ``("axis", None)``."""
+    match = _INDEXED.fullmatch(part)
+    return (part, None) if match is None else (match[1], int(match[2]))
+
+
 def _creatable(data: dict[str, Any], key: str) -> bool:
-    """A new dotted key can be made when its first part names a table of the document."""
-    return isinstance(data.get(key.split(".")[0]), dict)
+    """A new dotted key can be made when its first part names a table of the document, or a table of an
+    array of tables that is there (``check[0].name``)."""
+    name, index = _indexed(key.split(".")[0])
+    if index is None:
+        return isinstance(data.get(name), dict)
+    tables = data.get(name)
+    return isinstance(tables, list) and index < len(tables) and isinstance(tables[index], dict)
 
 
 @dataclass(frozen=True)

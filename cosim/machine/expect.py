@@ -30,6 +30,7 @@ built (:func:`signal_problem`), so ``check-machine`` finds a misspelt one before
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -160,22 +161,30 @@ def _servo_position(port: Any) -> str | None:
     return None if number is None else f"pmac.motor{number}.cmd_pos"
 
 
+#: An axis, motor or channel part of a signal name: a kind and its number (``axis3``, ``motor1``, ``cs2``).
+_NUMBERED = re.compile(r"([a-z_]+?)(\d+)")
+
+
 def signal_problem(trace: Trace, name: object, plants: Mapping[str, Any]) -> str | None:
     """Why ``name`` is not a signal a check or figure can read after the run (None: it is, or may be).
 
     A name declared by the machine is fine; so is one the controller may still declare while it runs
-    (another axis or channel of a kind it has: ``trio.axis1.step`` beside ``trio.axis3.step``). A
-    plant output that is not recorded says how to record it; anything else gets the close names.
+    (the same signal of another numbered axis, motor or channel of a kind it has: ``trio.axis1.step``
+    beside ``trio.axis3.step``; not ``pokeys.q.step`` beside ``pokeys.x.step``, whose axes are all
+    declared when it is built). A plant output that is not recorded says how to record it; anything
+    else gets the close names.
     """
     if not isinstance(name, str):
         return f"a signal name is text, not {name!r}"
     if name in trace.info:
         return None
     parts = name.split(".")
+    numbered = _NUMBERED.fullmatch(parts[1]) if len(parts) == 3 else None
     for known in trace.info:
         other = known.split(".")
-        if len(other) == len(parts) == 3 and other[0] == parts[0] and other[2] == parts[2]:
-            return None  # the same signal of another axis or channel: may be declared during the run
+        if (numbered is not None and len(other) == 3 and other[0] == parts[0] and other[2] == parts[2]
+                and (sibling := _NUMBERED.fullmatch(other[1])) is not None and sibling[1] == numbered[1]):
+            return None  # the same signal of another numbered axis or channel: may be declared during the run
     plant_name, _, variable = name.partition(".")
     plant = plants.get(plant_name)
     if plant is not None and variable in plant.variable_names():

@@ -10,10 +10,10 @@ a plant's FMU parameters (unit and range from the FMU's model description), a ch
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from typing import Any
 
-from cosim.machine.document import KeySpec, Table
+from cosim.machine.document import KeySpec, Table, leaves
 
 #: The ``[machine]`` keys the loader reads.
 LOADER = {"name": ("", "text (default: the file's name)"),
@@ -56,7 +56,7 @@ def describe(data: Mapping[str, Any], specs: list[KeySpec], *, plants: Mapping[s
     family = FAMILY_KEYS.get(name, {})
     known = {spec.key: _family(spec, family) for spec in specs}
     out: list[KeySpec] = []
-    for key, value in _leaves(data):
+    for key, value in leaves(data):
         spec = known.pop(key, None) or _family(_described(key, value, data, plants), family)
         if not spec.allowed and key.startswith("controller."):
             spec = KeySpec(spec.key, spec.value, spec.given, spec.unit, f"read by the {name} family")
@@ -91,16 +91,3 @@ def _described(key: str, value: Any, data: Mapping[str, Any], plants: Mapping[st
         if variable is not None:
             return KeySpec(key, value, True, variable.unit, f"{variable.allowed()} (FMU parameter)")
     return KeySpec(key, value, True, "", "")
-
-
-def _leaves(data: Mapping[str, Any], prefix: str = "") -> Iterator[tuple[str, Any]]:
-    """Dotted keys as the builder names them: tables by name, arrays of tables by index (``check[0].signal``)."""
-    for key, value in data.items():
-        path = f"{prefix}{key}"
-        if isinstance(value, dict):
-            yield from _leaves(value, path + ".")
-        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
-            for index, item in enumerate(value):
-                yield from _leaves(item, f"{path}[{index}].")
-        else:
-            yield path, value
