@@ -225,7 +225,7 @@ class Interpreter:
         elif kw == "call":
             self._call(label, args(), o.column)
         elif kw == "if":
-            self._if(label, here, args(), frame, need)
+            self._if(label, here, args(), frame, o.column)
         elif kw in ("elseif", "else"):
             # reached by running the branch before it: skip to endif
             frame.pc = need(source.partner(label, here, ("endif",)), "endif") + 1
@@ -262,14 +262,16 @@ class Interpreter:
         elif kw in ("break", "continue"):
             self._loop_jump(kw, label, here, frame, need)
 
-    def _if(self, label: Label, here: int, values: list[Number], frame: _Frame, need: object) -> None:
+    def _if(self, label: Label, here: int, values: list[Number], frame: _Frame, column: int) -> None:
         source = frame.file
         index = here
-        cond = _truth(values, "O-word `if`", self.where, 0)
+        cond = _truth(values, "O-word `if`", self.where, column)
+        if source.partner(label, here, ("endif",)) is None:
+            raise ProgramError(f"{self.where}:{column}", f"O-word `if` {_label_text(label)}: no matching endif")
         while not cond:
             nxt = source.partner(label, index, ("elseif", "else", "endif"))
             if nxt is None:
-                raise ProgramError(self.where, f"O-word `if` {_label_text(label)}: no matching endif")
+                raise ProgramError(f"{self.where}:{column}", f"O-word `if` {_label_text(label)}: no matching endif")
             kw = source.lines[nxt].oword.keyword  # type: ignore[union-attr]
             if kw != "elseif":
                 frame.pc = nxt + 1

@@ -92,13 +92,18 @@ class _Follower:
         return 1 / MM_PER_INCH if self.units == "mm" else MM_PER_INCH
 
     def machine(self, p: tuple[Number, ...]) -> Point:
-        x, y, z = p[0] + self.g92[0], p[1] + self.g92[1], p[2] + self.g92[2]
+        """Machine coordinates of program point ``p`` (the offsets are kept in machine units)."""
+        k = self._program_scale()
+        x, y, z = p[0] * k + self.g92[0], p[1] * k + self.g92[1], p[2] * k + self.g92[2]
         if self.rotation:
             c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
             x, y = x * c - y * s, x * s + y * c
+        return (_exact(x + self.g5x[0] + self.tlo[0]), _exact(y + self.g5x[1] + self.tlo[1]),
+                _exact(z + self.g5x[2] + self.tlo[2]))
+
+    def _in_machine_units(self, values: tuple[Number, ...]) -> tuple[Number, ...]:
         k = self._program_scale()
-        return (_exact((x + self.g5x[0] + self.tlo[0]) * k), _exact((y + self.g5x[1] + self.tlo[1]) * k),
-                _exact((z + self.g5x[2] + self.tlo[2]) * k))
+        return tuple(v * k if i in (0, 1, 2, 6, 7, 8) else v for i, v in enumerate(values))
 
     def feed_per_s(self) -> Fraction:
         f = _exact(self.feed)
@@ -148,16 +153,16 @@ class _Follower:
         self.units = "mm" if units == "MM" else "inch"
 
     def _set_g5x_offset(self, line: int, _n: int, *offset: Number) -> None:
-        self.g5x = offset
+        self.g5x = self._in_machine_units(offset)
 
     def _set_g92_offset(self, line: int, *offset: Number) -> None:
-        self.g92 = offset
+        self.g92 = self._in_machine_units(offset)
 
     def _set_xy_rotation(self, line: int, degrees: Number) -> None:
         self.rotation = degrees
 
     def _use_tool_length_offset(self, line: int, *offset: Number) -> None:
-        self.tlo = offset
+        self.tlo = self._in_machine_units(offset)
 
     def _set_feed_rate(self, line: int, feed: Number) -> None:
         self.feed = feed
@@ -240,12 +245,11 @@ class _Follower:
         # the program coordinates of the current point: invert the transformation of the last step's end
         x, y, z = self.position
         k = self._program_scale()
-        px, py, pz = x / k - self.g5x[0] - self.tlo[0], y / k - self.g5x[1] - self.tlo[1], z / k - self.g5x[2] - \
-            self.tlo[2]
+        px, py, pz = x - self.g5x[0] - self.tlo[0], y - self.g5x[1] - self.tlo[1], z - self.g5x[2] - self.tlo[2]
         if self.rotation:
             c, s = math.cos(math.radians(-self.rotation)), math.sin(math.radians(-self.rotation))
             px, py = px * c - py * s, px * s + py * c
-        return (px - self.g92[0], py - self.g92[1], pz - self.g92[2])
+        return ((px - self.g92[0]) / k, (py - self.g92[1]) / k, (pz - self.g92[2]) / k)
 
     def _dwell(self, line: int, seconds: Number) -> None:
         self.steps.append(Pause(_exact(seconds), line))

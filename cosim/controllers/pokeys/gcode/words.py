@@ -172,10 +172,10 @@ def check_uses(words: Words, motion: int) -> None:
               or (line_motion == 830 and False)),
         "Q": (line_motion in (50, 52, 730, 760, 830) or g.get(13) == 640 or g0 == 100
               or bool(m & {19, 66, 67, 68, 61}) or bool(m & set(range(100, 200)))),
-        "L": g0 == 100 or cycles or line_motion == 760 or bool(m & {66}),
+        "L": g0 == 100 or cycles or line_motion in (52, 760) or bool(m & {66}),
         "E": line_motion == 760 or bool(m & {66, 67, 68}),
         "H": g.get(8) in (430, 432) or line_motion == 760,
-        "D": g.get(7) in (410, 420),
+        "D": g.get(7) in (410, 420, 411, 421) or g.get(14) == 960,
     }
     for letter, used in checks.items():
         if words.has(letter) and not used:
