@@ -248,13 +248,26 @@ def test_tools_length_offsets_and_units() -> None:
         run("T7 M6\nM2\n")
 
 
-def test_cutter_radius_compensation_is_read_and_its_moves_are_refused_by_name() -> None:
-    """Not modelled yet: the offset path LinuxCNC computes. G41 with a zero-diameter tool runs the path as written."""
-    with pytest.raises(ConfigurationError, match=r"p.nc:2: G41 \(cutter radius compensation\): moves under "
-                                                 r"compensation are not modelled"):
-        run("G41 D1\nG1 X10 F100\nM2\n")
+def test_cutter_radius_compensation_as_linuxcnc_computes_it() -> None:
+    """rs274 for this path with a 6 mm tool (T1): the entry move ends 3 mm left of its end, perpendicular; the convex
+    corner at (0, 0) gets an arc around it; the concave corner before X5 Y5 is met where the offset paths cross."""
+    text = ("G21 G0 X-10 Y-10\nG41 D1\nG1 X0 Y0 F100\nX20\nY10\nG3 X10 Y20 R10\nG1 X0\nX5 Y5\nY0\nG40\n"
+            "G0 X-10 Y-10\nM2\n")
+    moves = [(c.name, *(round(float(a), 4) for a in c.args[:6])) for c in run(text).calls
+             if c.name in ("STRAIGHT_FEED", "STRAIGHT_TRAVERSE", "ARC_FEED")]
+    assert moves == [
+        ("STRAIGHT_TRAVERSE", -10, -10, 0, 0, 0, 0), ("STRAIGHT_FEED", -2.1213, 2.1213, 0, 0, 0, 0),
+        ("ARC_FEED", 0, 3, 0, 0, -1, 0), ("STRAIGHT_FEED", 17, 3, 0, 0, 0, 0), ("STRAIGHT_FEED", 17, 10, 0, 0, 0, 0),
+        ("ARC_FEED", 10, 17, 10, 10, 1, 0), ("STRAIGHT_FEED", 4.1623, 17, 0, 0, 0, 0),
+        ("STRAIGHT_FEED", 7.846, 5.9487, 0, 0, 0, 0), ("ARC_FEED", 8, 5, 5, 5, -1, 0),
+        ("STRAIGHT_FEED", 8, 0, 0, 0, 0, 0), ("STRAIGHT_TRAVERSE", -10, -10, 0, 0, 0, 0)]
+    with pytest.raises(ConfigurationError, match=r"Length of cutter compensation entry move is not greater than the "
+                                                 r"tool radius"):
+        run("G41 D1\nG1 X2 F100\nM2\n")
     with pytest.raises(ConfigurationError, match=r"Cannot turn cutter radius comp on when already on"):
         run("G41.1 D0\nG42.1 D0\nM2\n")
+    with pytest.raises(ConfigurationError, match=r"Cannot change tools with cutter radius compensation on"):
+        run("G41 D1\nT2 M6\nM2\n")
     assert ends("G41.1 D0\nG1 X10 F100\nG40\nM2\n") == [(10, 0, 0)]
 
 

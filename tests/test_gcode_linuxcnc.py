@@ -24,17 +24,9 @@ EXCEPTIONS = {
     "lathe_g7x_face_boring.ngc": "G72 (lathe facing cycle) is lathe-only and not supported",
     "lathe_g7x_quadrants.ngc": "G70/G71 (lathe roughing cycles) are lathe-only and not supported",
     "threading.ngc": "G33 (spindle-synchronised motion) is refused by name: cosim models no spindle encoder",
-    "skeleton.ngc": "after `T1 M06 G43 H1` rs274's stand-alone canon re-reads the position without the G43 of the "
-                    "same line (Z stays 0); LinuxCNC's task, and cosim, apply it (Z -0.1 in)",
-    "x-trim.ngc": "probing: cosim's probe never trips (G38.2 runs to its end); rs274's stand-alone canon reports a "
-                  "trip 0.01 in short of the end, so the touch-off height differs by 0.01 in",
-    "smartprobe.ngc": "probing: the program's search loop reads #5070 and the trip position, which differ as in "
-                      "x-trim.ngc (cosim's probe never trips)",
+    "mmount.ngc": "G33.1 (rigid tapping, spindle-synchronised) at line 314 is refused by name: cosim models no "
+                  "spindle encoder (the 691 calls before it agree)",
 }
-COMPENSATION = "cutter radius compensation (G41/G42): moves under it are refused by name, not modelled yet"
-for _name in ("comp-g1.ngc", "comp.ngc", "comp311.ngc", "comp311_2.ngc", "lathecomp.ngc", "mmount.ngc",
-              "useful-subroutines.ngc", "gmoccapy_2_tools_with_cutter_radius_compensation.ngc"):
-    EXCEPTIONS[_name] = COMPENSATION
 
 HAVE = oracle.rs274() is not None and oracle.SAMPLES.is_dir()
 PROGRAMS = sorted(oracle.SAMPLES.rglob("*.ngc")) if HAVE else []

@@ -195,6 +195,8 @@ def _io(interp: Interpreter, w: Words, code: int) -> None:
 
 def _tool_change(interp: Interpreter, w: Words, code: int) -> None:
     s = interp.state
+    if code == 6 and s.cutter != 400:
+        raise WordError("Cannot change tools with cutter radius compensation on", w.m_columns[6])
     if code == 6:
         if s.selected < 0:
             interp.note("M6 with no tool selected (T) keeps the tool")
@@ -337,6 +339,10 @@ def _stop(interp: Interpreter, code: int) -> None:
         interp.emit("PALLET_SHUTTLE")
         interp.emit("PROGRAM_STOP")
     else:
+        from cosim.controllers.pokeys.gcode import compensation
+
+        compensation.dequeue(interp)
+        s.cutter, s.cutter_radius = 400, 0
         motion.select_coordinates(interp, 1, end=True)
         if s.plane != 170:
             s.plane = 170

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
-from cosim.controllers.pokeys.gcode import messages, motion
+from cosim.controllers.pokeys.gcode import compensation, messages, motion
 from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
 from cosim.controllers.pokeys.gcode.flow import Label, Library, ProgramError, SourceFile, literal_label
 from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters, integer, show
@@ -101,10 +101,32 @@ class Interpreter:
         self.value_returned = 0
         self.saved_states: list[State] = []
         self.frames: list[_Frame] = []
+        self.comp_queue = compensation.Queue()
+        self.canon_tlo: tuple[Number, ...] = ZERO9
+        self.canon_machine: tuple[Number, ...] = ZERO9  # where the last canonical move ended (machine coordinates)
 
     # -- output ------------------------------------------------------------------------------------
     def emit(self, name: str, *args: object) -> None:
-        self.program.calls.append(Canon(name, args, self.frames[-1].file.path if self.frames else "", self.line))
+        """A canonical call now (held back with the compensated move if cutter compensation holds one)."""
+        if self.comp_queue and name in compensation.QUEUED:
+            compensation.enqueue(self, name, list(args))
+            return
+        self.emit_now(name, self.line, *args)
+
+    def emit_now(self, name: str, line: int, *args: object) -> None:
+        self.program.calls.append(Canon(name, args, self.frames[-1].file.path if self.frames else "", line))
+        if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE", "ARC_FEED"):
+            s = self.state
+            if name == "ARC_FEED":
+                first, second, normal = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}.get(s.plane, (0, 1, 2))
+                point: list[Number] = [0] * 9
+                point[first], point[second], point[normal] = args[0], args[1], args[5]  # type: ignore[assignment]
+                point[3:] = args[6:]  # type: ignore[assignment]
+            else:
+                point = list(args[:9])  # type: ignore[arg-type]
+            self.canon_tlo = s.tlo
+            self.canon_machine = tuple(p + o + a + t for p, o, a, t in zip(point, s.origin, s.axis_offset, s.tlo,
+                                                                           strict=True))
         if len(self.program.calls) > self.max_calls:
             raise ProgramError(self.where, f"the program makes more than {self.max_calls} canonical calls "
                                            "(an endless loop?)")
@@ -140,6 +162,7 @@ class Interpreter:
                 source = frame.file
                 end = source.stop if source.stop is not None else len(source.lines)
                 if frame.pc >= end:
+                    compensation.dequeue(self)
                     if len(self.frames) > 1:
                         raise ProgramError(source.where(frame.pc - 1), f"the file ended inside subroutine "
                                            f"{_label_text(frame.label)} (no endsub)")
@@ -162,7 +185,7 @@ class Interpreter:
                         self._oword(line, frame)
                     elif not line.empty or line.comments:
                         self._line(line)
-                except (WordError, EvalError, motion.MotionError) as exc:
+                except (WordError, EvalError) as exc:
                     column = getattr(exc, "column", 0) or 0
                     raise ProgramError(f"{self.where}:{column}" if column else self.where, str(exc)) from None
         except Stop:
@@ -374,7 +397,7 @@ class Interpreter:
             reason = UNSUPPORTED_MOTION[motion_code]
         elif motion_code in PROBES and not self.probe:
             reason = (f"{code_name('G', motion_code)} needs a probe input: add probe = true to [host] in the machine "
-                      "file (the probe then never touches)")
+                      "file (the probe trips at the end of the move)")
         if reason is not None:
             column = words.g_columns[1]
             if not self.allow_unsupported:
@@ -398,6 +421,13 @@ class Interpreter:
         from cosim.controllers.pokeys.gcode import execute
 
         execute.block(self, words)
+        if words.m.get(6) == 6:
+            # after a tool change LinuxCNC's interpreter re-reads its position from the end of the last move,
+            # in the offsets in force now but with the tool offset of that move (a G43 on the M6 line does
+            # not shift it; rs274 prints it so)
+            s = self.state
+            s.position = tuple(m - o - a - t for m, o, a, t in zip(self.canon_machine, s.origin, s.axis_offset, self.canon_tlo,
+                                                                   strict=True))
 
     # -- predefined parameters ---------------------------------------------------------------------
     def _predefined(self, name: str) -> Number | None:

@@ -35,7 +35,8 @@ class MotionError(WordError):
 def ends(interp: Interpreter, w: Words, *, machine: bool = False) -> list[Number]:
     """The end point of a move in program coordinates (absolute, incremental, G53 or polar words)."""
     s = interp.state
-    pos = list(s.position)
+    compensating = s.cutter != 400 and s.cutter_radius > 0
+    pos = list(s.comp_programmed if compensating else s.position)
     if machine and s.incremental:
         raise MotionError("Cannot use G53 incremental (G91)", w.g_columns.get(0, 0))
     for i, letter in enumerate(LETTERS):
@@ -120,7 +121,8 @@ def arc(interp: Interpreter, w: Words, code: int) -> None:
         if w.has(letter):
             raise MotionError(f"{letter} word given for arc in {plane_name} plane", w.column(letter))
     end = ends(interp, w)
-    start = s.position
+    compensating = s.cutter != 400 and s.cutter_radius > 0 and not s.comp_first
+    start = s.comp_programmed if compensating else s.position
     turns = 1
     if w.has("P"):
         p = integer(w.values["P"])
@@ -250,15 +252,20 @@ def probe(interp: Interpreter, w: Words, code: int) -> None:
     _feed_check(interp, w, code)
     start = interp.state.position
     distance = math.sqrt(sum(float(end[i] - start[i]) ** 2 for i in range(9)))
-    if distance < (0.01 if interp.state.units == "inch" else 0.254):
+    if code in (382, 383) and distance < (0.01 if interp.state.units == "inch" else 0.254):
         raise MotionError(f"{code_name('G', code)}: Start point too close to probe point (closer than 0.01 in)",
                           w.g_columns.get(1, 0))
     interp.emit("STRAIGHT_PROBE", *end)
-    interp.note(f"{code_name('G', code)}: the probe input never trips in the simulation (the move runs to its end)")
+    interp.note(f"{code_name('G', code)}: the probe is modelled as rs274 and LinuxCNC's preview model it: the move "
+                "runs to its end, the machine backs off 0.01 in (0.254 mm) toward the start, #5070 (tripped) is 0")
     interp.params.numbered[5070] = 0
     for i in range(9):
         interp.params.numbered[5061 + i] = end[i]
-    interp.state.position = tuple(end)
+    backoff = 0.01 if interp.state.units == "inch" else 0.254
+    back = list(end)
+    for i in range(3):
+        back[i] = end[i] + (start[i] - end[i]) * backoff / distance if distance else end[i]
+    interp.state.position = tuple(back)
 
 
 # -- offsets ---------------------------------------------------------------------------------------
@@ -309,6 +316,8 @@ def non_modal(interp: Interpreter, w: Words, g0: int) -> None:
             machine = s.position[i] + s.origin[i] + s.axis_offset[i] + s.tlo[i]
             interp.params.numbered[base + i] = interp.program_to_machine(machine) if i in (0, 1, 2, 6, 7, 8) \
                 else machine
+    elif g0 in (520, 920, 921, 922, 923) and s.cutter != 400:
+        raise MotionError("Cannot change axis offsets with cutter radius comp", column)
     elif g0 in (520, 920):
         if not axes:
             raise MotionError(f"All axes missing with {code_name('G', g0)} (give the axis words)", column)

@@ -79,6 +79,8 @@ class State:
     cycle_values: dict[str, Number] = field(default_factory=dict)
     cycle_old_z: Number = 0
     motion_outputs: dict[int, int] = field(default_factory=dict)
+    comp_first: bool = False  # the next move is the entry move of cutter radius compensation
+    comp_programmed: tuple[Number, ...] = ZERO9  # the programmed point under compensation (position: the tool's)
 
     def copy(self) -> State:
         return State(**{k: (dict(v) if isinstance(v, dict) else v) for k, v in self.__dict__.items()})
