@@ -128,7 +128,7 @@ def test_unsupported_words_can_be_skipped_and_are_listed_and_the_geometry_words_
 @pytest.mark.parametrize(("program", "message"), [
     ("G21\nG0 X1\nG38.2 Z-2 F100\n", r"job.nc:3:1: G38.2 needs a probe input: add probe = true to \[host\]"),
     ("G21\nM3 S100\nG33 Z-5 K1\n", r"job.nc:3:1: G33 \(spindle-synchronised motion\) needs a spindle encoder"),
-    ("G21\nG0 X10\nG2 X0 Y0 I-4 J0 F100\n", r"job.nc:3:13: Radius to end of arc differs from radius to start"),
+    ("G21\nG0 X10\nG2 X0 Y0 I-4 J0 F100\n", r"job.nc:3:10: Radius to end of arc differs from radius to start"),
     ("G21\nG0 X10\nG1 X0 Y0\n", r"job.nc:3:1: Cannot do G1 with zero feed rate"),
     ("[machine]\nuntil = \"1 s\"\n", r"job.nc:1:1: not G-code"),
     ("o100 call\nM2\n", r"job.nc:1:6: O-word `call` o100: the subroutine is not defined"),
