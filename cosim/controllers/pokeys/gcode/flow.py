@@ -86,6 +86,7 @@ def literal_label(label: object) -> Label | None:
 
 def parse_text(text: str, path: str) -> SourceFile:
     """Parse a whole program; the first syntax error is raised as ``ProgramError``."""
+    text = text.removeprefix("\ufeff")  # a byte order mark, as Windows editors write it
     if "\x00" in text:
         line = text[:text.index("\x00")].count("\n") + 1
         raise ProgramError(f"{path}:{line}", "not G-code: the file holds NUL bytes (a binary file?)")

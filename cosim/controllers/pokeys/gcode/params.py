@@ -26,6 +26,9 @@ from cosim.controllers.pokeys.gcode.syntax import Binary, Exists, Expr, Func, Ne
 
 Number = Fraction | float | int
 MAX_PARAMETER = 5602
+#: The largest number a program may write or compute (a double holds 1.8e308; a machine needs far less).
+LARGEST = 10**15
+LARGEST_RESULT = 1e300
 TOLERANCE_EQUAL = 0.0001
 #: Numbered parameters kept per call (the subroutine's arguments).
 LOCAL_NUMBERED = range(1, 31)
@@ -106,7 +109,11 @@ class Parameters:
         """The value of ``expr`` with the parameters as they are now."""
         kind = type(expr)
         if kind is Num:
-            return expr.value  # type: ignore[union-attr]
+            value = expr.value  # type: ignore[union-attr]
+            if value > LARGEST:
+                digits = len(str(int(value)))
+                raise EvalError(f"a number of {digits} digits is too large (at most {LARGEST:.0e})")
+            return value
         if kind is Param:
             index = expr.index  # type: ignore[union-attr]
             return self.read(index if isinstance(index, str) else self.evaluate(index))
@@ -210,6 +217,8 @@ def function(name: str, args: list[Number]) -> Number:
 def _finite(value: Number) -> Number:
     if isinstance(value, float) and not math.isfinite(value):
         raise EvalError("the result is not a finite number")
+    if not isinstance(value, float) and abs(value) > LARGEST_RESULT:
+        raise EvalError("the result is too large")
     return value
 
 

@@ -178,6 +178,29 @@ def normalize(text: str) -> tuple[str, list[int]]:
     return "".join(out), columns
 
 
+MAX_DEPTH = 50
+"""Brackets, ``#`` and signs nested at most this deep in one value."""
+
+
+def _too_deep(normalized: str) -> int | None:
+    """The index where a value nests more than :data:`MAX_DEPTH` levels, or None."""
+    depth = run = 0
+    for i, c in enumerate(normalized):
+        if c == "(" or c == ";":
+            break
+        if c == "[":
+            depth += 1
+        elif c == "]":
+            depth -= 1
+        if c in "#-+":
+            run += 1
+        elif c != "[":
+            run = 0
+        if depth + run > MAX_DEPTH:
+            return i
+    return None
+
+
 @lru_cache(maxsize=4096)
 def _parse(normalized: str) -> Any:
     return _PARSER.parse(normalized)
@@ -194,6 +217,9 @@ def parse_line(text: str, number: int = 1) -> SourceLine:
     normalized, columns = normalize(text)
     if not normalized:
         return SourceLine(number, text, False, None, (), (), (), None)
+    deep = _too_deep(normalized)
+    if deep is not None:
+        raise GcodeSyntaxError(f"expression nested more than {MAX_DEPTH} levels deep", _column(columns, deep, text))
     try:
         tree = _parse(normalized)
     except UnexpectedInput as exc:
