@@ -27,7 +27,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 from gcode_fuzz_programs import draw, exercise, seeds
 
-
 #: Wall time above which an input counts as slow [s].
 SLOW_S = 5.0
 

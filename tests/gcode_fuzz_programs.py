@@ -108,7 +108,7 @@ def valid_line(rng: random.Random) -> str:
         f"#<a> = {expression(rng)}", f"#1 = [#1 + {number(rng)}]", "o<a> call [1] [2]", "G41.1 D2", "G40",
         f"o1 if [#1 gt {number(rng)}]\nG0 X1\no1 else\nG0 X2\no1 endif", "o2 repeat [3]\nG91 G0 X1 G90\no2 endrepeat",
         "#9=0\no3 while [#9 lt 3]\n#9=[#9+1]\no3 endwhile", "M62 P1", "M66 P0 L0", "M70\nG20\nM72",
-        f"G5 X{x} Y{y} I1 J1 P-1 Q1", "(MSG, step)", "M1", "M0", f"G53 G0 Z{z}", "G28", f"G38.2 Z-10 F100",
+        f"G5 X{x} Y{y} I1 J1 P-1 Q1", "(MSG, step)", "M1", "M0", f"G53 G0 Z{z}", "G28", "G38.2 Z-10 F100",
     ])
 
 
@@ -149,7 +149,8 @@ def mutate(rng: random.Random, text: str) -> str:
 
 
 def random_text(rng: random.Random) -> str:
-    return "".join(chr(rng.choice([rng.randint(32, 126), rng.randint(0, 0x2FF), 10])) for _ in range(rng.randint(0, 200)))
+    size = rng.randint(0, 200)
+    return "".join(chr(rng.choice([rng.randint(32, 126), rng.randint(0, 0x2FF), 10])) for _ in range(size))
 
 
 def seeds() -> list[str]:

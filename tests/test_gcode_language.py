@@ -61,8 +61,9 @@ def test_named_parameters_local_global_and_exists() -> None:
     """Reference: #<_endmill_dia> = 0.049; #<_endmill_rad> = [#<_endmill_dia>/2.0]; names lose case and spaces."""
     assert ends("#<_endmill_dia> = 0.049\n#<_endmill_rad> = [#<_endmill_dia>/2.0]\nG0 X#<_EndMill_ Rad>\nM2\n") == \
         [(pytest.approx(0.0245), 0, 0)]
-    assert messages("o1 if [EXISTS[#<_global>]]\n(DEBUG, yes)\no1 else\n(DEBUG, no)\no1 endif\n#<_global>=4711\n"
-                    "o2 if [EXISTS[#<_global>]]\n(DEBUG, now #<_global>)\no2 endif\nM2\n") == [" no", " now 4711.000000"]
+    text = ("o1 if [EXISTS[#<_global>]]\n(DEBUG, yes)\no1 else\n(DEBUG, no)\no1 endif\n#<_global>=4711\n"
+            "o2 if [EXISTS[#<_global>]]\n(DEBUG, now #<_global>)\no2 endif\nM2\n")
+    assert messages(text) == [" no", " now 4711.000000"]
     with pytest.raises(ConfigurationError, match=r"p.nc:1:4: X word: Named parameter #<nothing> not defined"):
         run("G0 X#<nothing>\nM2\n")
     with pytest.raises(ConfigurationError, match=r"Cannot assign to read-only parameter #<_x>"):
@@ -125,8 +126,8 @@ def test_subroutines_with_arguments_and_return_values() -> None:
     text = ("o<sq> sub\nG1 X#1 F#2\no<sq> endsub [#1*2]\no100 sub\no100 return [7]\no100 endsub\n"
             "o<sq> call [3] [200]\n(DEBUG, %d#<_value> #<_value_returned> #1)\no100 call\n(DEBUG, %d#<_value>)\nM2\n")
     assert messages(text) == [" 6 1 0", " 7"]  # %d holds for the rest of the line
-    assert calls(text, "STRAIGHT_FEED", "SET_FEED_RATE")[:2] == [("SET_FEED_RATE", 200), ("STRAIGHT_FEED", 3, 0, 0, 0, 0,
-                                                                                         0, 0, 0, 0)]
+    assert calls(text, "STRAIGHT_FEED", "SET_FEED_RATE")[:2] == [("SET_FEED_RATE", 200),
+                                                                  ("STRAIGHT_FEED", 3, 0, 0, 0, 0, 0, 0, 0, 0)]
 
 
 def test_if_elseif_else_while_do_repeat_break_continue() -> None:
@@ -154,9 +155,8 @@ def test_o_word_errors_name_the_o_word() -> None:
         run("o<a> endsub\nM2\n")
     with pytest.raises(ConfigurationError, match=r"O-word `while`: no other words are allowed"):
         run("o1 while [1] G0 X1\nM2\n")
-    with pytest.raises(ConfigurationError, match=r"p.nc:1: the program runs more than 1000 lines \(an endless loop\?\)"):
-        canonical(read_text("o1 while [1]\no1 endwhile\nM2\n", source="p.nc"), tools=TOOLS) if False else \
-            _endless()
+    with pytest.raises(ConfigurationError, match=r"p.nc:1: the program runs more than 1000 lines"):
+        _endless()
 
 
 def _endless() -> None:

@@ -14,9 +14,8 @@ exception is listed here with its reason.
 
 from __future__ import annotations
 
-import pytest
-
 import linuxcnc_oracle as oracle
+import pytest
 
 #: Programs on which cosim and rs274 differ, and why.
 EXCEPTIONS = {

@@ -143,8 +143,8 @@ def test_spindle_words_and_dwell_become_records_and_m2_ends_the_program() -> Non
     ("G0 X1\nG1 X2\n", r"^p.nc:2:1: Cannot do G1 with zero feed rate"),
     ("G1 X2 F0\n", r"^p.nc:1:1: Cannot do G1 with zero feed rate"),
     ("G0 X10\nG2 X0 Y0 I-4 J0 F100\n", r"^p.nc:2:10: Radius to end of arc differs from radius to start: G2 "
-                                        r"start=\(X10.0000,Y0.0000\) center=\(X6.0000,Y0.0000\) end=\(X0.0000,Y0.0000\) "
-                                        r"r1=4.0000 r2=6.0000"),
+                                        r"start=\(X10.0000,Y0.0000\) center=\(X6.0000,Y0.0000\) "
+                                        r"end=\(X0.0000,Y0.0000\) r1=4.0000 r2=6.0000"),
     ("G0 X10\nG2 X0 Y0 R4 F100\n", r"^p.nc:2:10: G2 R4: Arc radius too small to reach end point \(the end is 10 "
                                    r"away: R must be at least 5\)"),
     ("G0 X10\nG2 X10 R4 F100\n", r"^p.nc:2:8: G2 R4: Current point same as end point of arc"),

@@ -53,8 +53,8 @@ class JobWatch:
     """
 
     def __init__(self, sim: Simulation, engine: PulseEngine, *, slots: int,
-                 outputs: Sequence[tuple[int, Spindle | Output | Message]] = (), on_end: Callable[[], None] | None = None
-                 ) -> None:
+                 outputs: Sequence[tuple[int, Spindle | Output | Message]] = (),
+                 on_end: Callable[[], None] | None = None) -> None:
         self.sim = sim
         self.engine = engine
         self.slots = integer(slots, "job slots", low=0)

@@ -57,10 +57,10 @@ from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
 from cosim.controllers.pokeys.gcode import UNITS, HostSetup, Tool, canonical, read_file, toolpath
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.job import JobWatch
-from cosim.controllers.pokeys.states import EngineState
 from cosim.controllers.pokeys.limits import AXIS_NAMES
 from cosim.controllers.pokeys.pathplan import MODES, HostAxis, PathSettings, PlannedJob, plan_toolpath
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.controllers.pokeys.states import EngineState
 from cosim.errors import ConfigurationError
 from cosim.job import Job, JobState
 from cosim.machine.document import Table

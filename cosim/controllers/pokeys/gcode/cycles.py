@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from cosim.controllers.pokeys.gcode.params import Number, integer, show
 from cosim.controllers.pokeys.gcode.motion import ends
+from cosim.controllers.pokeys.gcode.params import Number, integer, show
 from cosim.controllers.pokeys.gcode.words import WordError, Words, code_name
 
 if TYPE_CHECKING:

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 
-from cosim.controllers.pokeys.gcode import compensation, messages, motion
+from cosim.controllers.pokeys.gcode import compensation, messages
 from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
 from cosim.controllers.pokeys.gcode.flow import Label, Library, ProgramError, SourceFile, literal_label
 from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters, integer, show
@@ -426,8 +426,8 @@ class Interpreter:
             # in the offsets in force now but with the tool offset of that move (a G43 on the M6 line does
             # not shift it; rs274 prints it so)
             s = self.state
-            s.position = tuple(m - o - a - t for m, o, a, t in zip(self.canon_machine, s.origin, s.axis_offset, self.canon_tlo,
-                                                                   strict=True))
+            s.position = tuple(m - o - a - t for m, o, a, t in zip(self.canon_machine, s.origin, s.axis_offset,
+                                                                   self.canon_tlo, strict=True))
 
     # -- predefined parameters ---------------------------------------------------------------------
     def _predefined(self, name: str) -> Number | None:
@@ -446,4 +446,4 @@ def _label_text(label: Label | None) -> str:
     return f"o{label}"
 
 
-__all__ = ["ORDER", "Interpreter", "ProgramError", "Stop", "Tool", "ZERO9"]
+__all__ = ["ORDER", "ZERO9", "Interpreter", "ProgramError", "Stop", "Tool"]

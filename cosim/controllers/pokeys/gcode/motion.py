@@ -145,10 +145,7 @@ def arc(interp: Interpreter, w: Words, code: int) -> None:
             raise MotionError(f"{off1} and {off2} words missing for arc in {plane_name} plane (give the centre, or R)",
                               w.g_columns.get(1, 0) or min(w.columns.values() or [0]))
         o1, o2 = w.values.get(off1, 0), w.values.get(off2, 0)
-        if s.ijk_absolute:
-            center = (o1, o2)
-        else:
-            center = (start[first] + o1, start[second] + o2)
+        center = (o1, o2) if s.ijk_absolute else (start[first] + o1, start[second] + o2)
         r1 = math.hypot(float(center[0] - start[first]), float(center[1] - start[second]))
         r2 = math.hypot(float(center[0] - end[first]), float(center[1] - end[second]))
         min_radius = 0.00005 if inch else 0.0005
@@ -368,10 +365,7 @@ def _g10(interp: Interpreter, w: Words, column: int) -> None:
             v = w.values.get(letter)
             if v is None:
                 continue
-            if l_ == 2:
-                value = v
-            else:
-                value = s.position[i] + s.origin[i] - v
+            value = v if l_ == 2 else s.position[i] + s.origin[i] - v
             interp.params.numbered[base + i] = interp.program_to_machine(value) if i in (0, 1, 2, 6, 7, 8) else value
         if w.has("R"):
             interp.params.numbered[base + 9] = w.values["R"]

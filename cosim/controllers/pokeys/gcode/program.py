@@ -20,11 +20,22 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
+from itertools import pairwise
 
 from cosim.controllers.pokeys.gcode.canon import CanonProgram, Number
 from cosim.controllers.pokeys.gcode.state import MM_PER_INCH
-from cosim.controllers.pokeys.toolpath import (Arc, Line, Message, Output, PathControl, Pause, Point, Spindle, Step,
-                                              Toolpath)
+from cosim.controllers.pokeys.toolpath import (
+    Arc,
+    Line,
+    Message,
+    Output,
+    PathControl,
+    Pause,
+    Point,
+    Spindle,
+    Step,
+    Toolpath,
+)
 
 PLANES = {"XY": ((0, 1), 2, "xy"), "XZ": ((2, 0), 1, "zx"), "YZ": ((1, 2), 0, "yz")}
 MODES = {"EXACT_STOP": "exact_stop", "EXACT_PATH": "exact_path", "CONTINUOUS": "blend"}
@@ -294,7 +305,8 @@ class _Follower:
         if self.setup.optional_stop:
             self._program_stop(line)
         else:
-            note = f"{self.program.source}:{line}: M1 does not stop: the optional stop switch is off (host.optional_stop)"
+            note = (f"{self.program.source}:{line}: M1 does not stop: the optional stop switch is off "
+                    "(host.optional_stop)")
             if note not in self.notes:
                 self.notes.append(note)
 
@@ -334,8 +346,7 @@ class _Follower:
 def _bezier(ctrl: list[tuple[float, float]], t: float) -> tuple[float, float]:
     points = list(ctrl)
     while len(points) > 1:
-        points = [((1 - t) * a[0] + t * b[0], (1 - t) * a[1] + t * b[1]) for a, b in zip(points, points[1:],
-                                                                                       strict=False)]
+        points = [((1 - t) * a[0] + t * b[0], (1 - t) * a[1] + t * b[1]) for a, b in pairwise(points)]
     return points[0]
 
 

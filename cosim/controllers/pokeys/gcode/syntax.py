@@ -264,7 +264,7 @@ def _syntax_error(exc: UnexpectedInput, normalized: str, columns: list[int], tex
             return GcodeSyntaxError(f"the letter {before[-1].upper()!r} at column {_column(columns, index - 1, text)}"
                                     f" is followed by {found}, not a value (a word is a letter and a number, "
                                     "e.g. G1 or X-2.5)", column)
-        if before.rstrip("0123456789.").endswith("o") or before.endswith(">") and "o<" in before:
+        if before.rstrip("0123456789.").endswith("o") or (before.endswith(">") and "o<" in before):
             return GcodeSyntaxError(f"an O-word needs a keyword after its label (sub, endsub, call, if, ...), "
                                     f"found {found}", column)
         if "[" in before and before.count("[") > before.count("]"):

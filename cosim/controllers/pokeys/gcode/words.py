@@ -154,7 +154,7 @@ def check_uses(words: Words, motion: int) -> None:
     g = words.g
     line_motion = g.get(1, motion)
     g0 = g.get(0)
-    axis_user_0 = g0 in AXIS_USERS_0 or g0 in (281, 301) and False
+    axis_user_0 = g0 in AXIS_USERS_0 or (g0 in (281, 301) and False)
     if g0 in AXIS_USERS_0 and 1 in g and g[1] != 800 and words.axes():
         raise WordError(f"{code_name('G', g0)} and {code_name('G', g[1])} both use the axis words: one per line",
                         words.g_columns[0])
