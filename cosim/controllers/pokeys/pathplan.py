@@ -43,7 +43,7 @@ from fractions import Fraction
 from math import isqrt
 
 from cosim.controllers.pokeys.limits import AXIS_NAMES, MAX_PULSES_PER_SLOT, SLOTS_PER_S
-from cosim.controllers.pokeys.toolpath import Arc, Line, PathControl, Pause, Point, Spindle, Toolpath
+from cosim.controllers.pokeys.toolpath import Arc, Line, Message, Output, PathControl, Pause, Point, Spindle, Toolpath
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
 from cosim.validate import choice, in_range, integer, positive
@@ -144,7 +144,7 @@ class PlannedJob:
     counts: list[Counts]
     end_steps: tuple[int, ...]
     notes: tuple[str, ...] = ()
-    outputs: tuple[tuple[int, Spindle], ...] = ()
+    outputs: tuple[tuple[int, Spindle | Output | Message], ...] = ()
     segments: int = 0
     skipped: tuple[str, ...] = field(default=())
 
@@ -211,7 +211,7 @@ class _Builder:
         self.corner_modes: list[tuple[bool, bool, float]] = []
         self.counts: list[Counts] = []
         self.notes: dict[int, str] = {}
-        self.outputs: list[tuple[int, Spindle]] = []
+        self.outputs: list[tuple[int, Spindle | Output | Message]] = []
         self.n_segments = 0
 
     def path_control(self, step: PathControl) -> None:

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from cosim.controllers.pokeys.gcode.params import Number, integer
 from cosim.controllers.pokeys.gcode.words import WordError, Words
@@ -50,7 +50,7 @@ class CompensationError(WordError):
 @dataclass
 class _Item:
     name: str
-    args: list[object]
+    args: list[Any]
     line: int
     direction: tuple[float, float] = (0.0, 0.0)  # of the programmed line (straight moves)
     turns: float = 0.0  # the arc's original angular length (arcs)
@@ -111,8 +111,8 @@ def switch(interp: Interpreter, w: Words, code: int) -> None:
 
 
 # -- the queue --------------------------------------------------------------------------------------
-def enqueue(interp: Interpreter, name: str, args: list[object], **extra: object) -> None:
-    interp.comp_queue.items.append(_Item(name, args, interp.line, **extra))  # type: ignore[arg-type]
+def enqueue(interp: Interpreter, name: str, args: list[Any], **extra: Any) -> None:
+    interp.comp_queue.items.append(_Item(name, args, interp.line, **extra))
 
 
 def dequeue(interp: Interpreter) -> None:
@@ -137,12 +137,12 @@ def move_endpoint_and_flush(interp: Interpreter, x: float, y: float) -> None:
     first, second = COMP_AXES.get(interp.state.plane, (0, 1))
     for item in queue.items:
         if item.name == "ARC_FEED":
-            c1, c2 = float(item.args[2]), float(item.args[3])  # type: ignore[arg-type]
-            r1 = math.hypot(float(item.args[0]) - c1, float(item.args[1]) - c2)  # type: ignore[arg-type]
+            c1, c2 = float(item.args[2]), float(item.args[3])
+            r1 = math.hypot(float(item.args[0]) - c1, float(item.args[1]) - c2)
             item.args[0], item.args[1] = x, y
             r2 = math.hypot(x - c1, y - c2)
             start = queue.endpoint
-            turns = find_turn(start[0], start[1], c1, c2, int(item.args[4]), x, y)  # type: ignore[arg-type]
+            turns = find_turn(start[0], start[1], c1, c2, int(item.args[4]), x, y)
             if abs(r1 - r2) > 0.01:
                 raise CompensationError(f"cutter compensation made an arc with mismatched radii r1 {r1:f} r2 {r2:f}")
             if item.turns and abs(turns) > abs(item.turns):
@@ -232,7 +232,7 @@ def straight(interp: Interpreter, end: list[Number], code: int) -> None:
         front = queue.items[0] if queue.items else None
         concave = beta < -SMALL or beta > math.pi + SMALL or (
             beta > math.pi - SMALL and front is not None and front.name == "ARC_FEED"
-            and ((side == RIGHT and front.args[4] > 0) or (side == LEFT and front.args[4] < 0)))  # type: ignore
+            and ((side == RIGHT and front.args[4] > 0) or (side == LEFT and front.args[4] < 0)))
         if not concave and beta > SMALL:  # a convex corner: around it
             move_endpoint_and_flush(interp, cx, cy)
             corner = list(s.position)
@@ -271,9 +271,9 @@ def _arc_args(e1: float, e2: float, c1: float, c2: float, turn: int, normal: flo
 
 def _arc_to_line(interp: Interpreter, prev: _Item, side: int, radius: float, ox: float, oy: float, px: float,
                  py: float) -> None:
-    c1, c2 = float(prev.args[2]), float(prev.args[3])  # type: ignore[arg-type]
-    turn = int(prev.args[4])  # type: ignore[call-overload]
-    old = math.hypot(c2 - float(prev.args[1]), c1 - float(prev.args[0]))  # type: ignore[arg-type]
+    c1, c2 = float(prev.args[2]), float(prev.args[3])
+    turn = int(prev.args[4])
+    old = math.hypot(c2 - float(prev.args[1]), c1 - float(prev.args[0]))
     base = math.atan2(py - oy, px - ox)
     theta = base + math.pi / 2 if turn > 0 else base - math.pi / 2
     phi = math.atan2(c2 - oy, c1 - ox)
@@ -389,8 +389,8 @@ def _line_to_arc(interp: Interpreter, side: int, turn: int, radius: float, arc_r
 
 def _arc_to_arc(interp: Interpreter, prev: _Item, side: int, turn: int, radius: float, arc_radius: float,
                 ccx: float, ccy: float) -> None:
-    p1, p2 = float(prev.args[2]), float(prev.args[3])  # type: ignore[arg-type]
-    old = math.hypot(p2 - float(prev.args[1]), p1 - float(prev.args[0]))  # type: ignore[arg-type]
+    p1, p2 = float(prev.args[2]), float(prev.args[3])
+    old = math.hypot(p2 - float(prev.args[1]), p1 - float(prev.args[0]))
     new = arc_radius - radius if _inside(side, turn) else arc_radius + radius
     between = math.hypot(p2 - ccy, p1 - ccx)
     if old == 0 or between == 0:
@@ -399,7 +399,7 @@ def _arc_to_arc(interp: Interpreter, prev: _Item, side: int, turn: int, radius: 
     _fits(a, "Arc to arc motion makes a corner the compensated tool can't fit in without gouging")
     pullback = math.acos(a)
     direction = math.atan2(ccy - p2, ccx - p1)
-    prev_turn = int(prev.args[4])  # type: ignore[call-overload]
+    prev_turn = int(prev.args[4])
     if _inside(side, prev_turn):
         angle = direction + pullback if turn > 0 else direction - pullback
     else:

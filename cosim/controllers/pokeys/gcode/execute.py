@@ -6,7 +6,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from cosim.controllers.pokeys.gcode import cycles, motion
-from cosim.controllers.pokeys.gcode.flow import ProgramError
+from cosim.controllers.pokeys.gcode.flow import ProgramError, Stop
 from cosim.controllers.pokeys.gcode.params import Number, integer, show
 from cosim.controllers.pokeys.gcode.state import MM_PER_INCH, State
 from cosim.controllers.pokeys.gcode.words import WordError, Words
@@ -321,15 +321,14 @@ def restore(interp: Interpreter, saved: State) -> None:
     if (saved.path, saved.path_p) != (s.path, s.path_p):
         interp.emit("SET_MOTION_CONTROL_MODE", {611: "EXACT_STOP", 610: "EXACT_PATH", 640: "CONTINUOUS"}[saved.path],
                     saved.path_p)
-    keep = {k: getattr(s, k) for k in ("position", "origin", "axis_offset", "tlo", "coord", "tool", "selected",
-                                       "rotation", "tool_length")}
-    interp.state = replace(saved, **keep)
+    # M72 restores the modes; where the machine is, its offsets and its tool stay as they are now
+    interp.state = replace(saved, position=s.position, origin=s.origin, axis_offset=s.axis_offset, tlo=s.tlo,
+                           coord=s.coord, tool=s.tool, selected=s.selected, rotation=s.rotation,
+                           tool_length=s.tool_length)
     interp.state.units, interp.state.plane = saved.units, saved.plane
 
 
 def _stop(interp: Interpreter, code: int) -> None:
-    from cosim.controllers.pokeys.gcode.interpreter import Stop
-
     s = interp.state
     if code == 0:
         interp.emit("PROGRAM_STOP")

@@ -20,6 +20,10 @@ from cosim.controllers.pokeys.gcode.syntax import GcodeSyntaxError, Neg, Num, So
 Label = int | str
 
 
+class Stop(Exception):
+    """The program ended (M2, M30, ``%``)."""
+
+
 class ProgramError(Exception):
     """An error at ``where`` (``file:line:column``) with LinuxCNC's meaning."""
 
@@ -109,14 +113,14 @@ def parse_text(text: str, path: str) -> SourceFile:
             lines.append(SourceLine(index + 1, raw, False, None, (), (), (), None))
             continue
         try:
-            line = parse_line(raw, index + 1)
+            parsed = parse_line(raw, index + 1)
         except GcodeSyntaxError as exc:
             raise ProgramError(f"{path}:{index + 1}:{exc.column}", f"not G-code: {exc.reason}") from None
-        if line.oword is not None:
-            label = literal_label(line.oword.label)
+        if parsed.oword is not None:
+            label = literal_label(parsed.oword.label)
             if label is not None:
-                labels.setdefault(label, []).append((index, line.oword.keyword))
-        lines.append(line)
+                labels.setdefault(label, []).append((index, parsed.oword.keyword))
+        lines.append(parsed)
     return SourceFile(path, lines, labels, start, stop)
 
 

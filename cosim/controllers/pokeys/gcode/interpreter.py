@@ -18,10 +18,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
+from typing import Any
 
-from cosim.controllers.pokeys.gcode import compensation, messages
+from cosim.controllers.pokeys.gcode import compensation, execute, messages
 from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
-from cosim.controllers.pokeys.gcode.flow import Label, Library, ProgramError, SourceFile, literal_label
+from cosim.controllers.pokeys.gcode.flow import Label, Library, ProgramError, SourceFile, Stop, literal_label
 from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters, integer, show
 from cosim.controllers.pokeys.gcode.state import MM_PER_INCH, ZERO9, State, Tool
 from cosim.controllers.pokeys.gcode.syntax import SourceLine
@@ -46,10 +47,6 @@ class _Frame:
     label: Label | None = None
     repeats: dict[int, int] = field(default_factory=dict)
     call_where: str = ""
-
-
-class Stop(Exception):
-    """The program ended (M2, M30, ``%``)."""
 
 
 class Interpreter:
@@ -119,11 +116,11 @@ class Interpreter:
             s = self.state
             if name == "ARC_FEED":
                 first, second, normal = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}.get(s.plane, (0, 1, 2))
-                point: list[Number] = [0] * 9
-                point[first], point[second], point[normal] = args[0], args[1], args[5]  # type: ignore[assignment]
-                point[3:] = args[6:]  # type: ignore[assignment]
+                point: list[Any] = [0] * 9
+                point[first], point[second], point[normal] = args[0], args[1], args[5]
+                point[3:] = args[6:]
             else:
-                point = list(args[:9])  # type: ignore[arg-type]
+                point = list(args[:9])
             self.canon_tlo = s.tlo
             self.canon_machine = tuple(p + o + a + t for p, o, a, t in zip(point, s.origin, s.axis_offset, s.tlo,
                                                                            strict=True))
@@ -240,11 +237,9 @@ class Interpreter:
             self.params.leave(done.saved)
             marker = done.repeats.get(-1)
             if marker is not None and len(self.saved_states) >= marker:
-                from cosim.controllers.pokeys.gcode.execute import restore
-
                 saved = self.saved_states[marker - 1]
                 del self.saved_states[marker - 1:]
-                restore(self, saved)
+                execute.restore(self, saved)
         elif kw == "call":
             self._call(label, args(), o.column)
         elif kw == "if":
@@ -398,7 +393,7 @@ class Interpreter:
         elif motion_code in PROBES and not self.probe:
             reason = (f"{code_name('G', motion_code)} needs a probe input: add probe = true to [host] in the machine "
                       "file (the probe trips at the end of the move)")
-        if reason is not None:
+        if reason is not None and motion_code is not None:
             column = words.g_columns[1]
             if not self.allow_unsupported:
                 raise WordError(reason, column)
@@ -418,8 +413,6 @@ class Interpreter:
             words.values.pop("Q", None)
 
     def _execute(self, words: Words) -> None:
-        from cosim.controllers.pokeys.gcode import execute
-
         execute.block(self, words)
         if words.m.get(6) == 6:
             # after a tool change LinuxCNC's interpreter re-reads its position from the end of the last move,

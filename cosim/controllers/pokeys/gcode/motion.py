@@ -134,12 +134,13 @@ def arc(interp: Interpreter, w: Words, code: int) -> None:
     if w.has("R"):
         if w.has(off1) or w.has(off2):
             raise MotionError(f"{name}: give the centre one way, R or {off1}{off2}", w.column("R"))
-        a1, a2 = LETTERS[first], LETTERS[second]
-        if not w.has(a1) and not w.has(a2):
-            raise MotionError(f"{a1} and {a2} words missing for arc in {plane_name} plane (an R arc needs its end "
-                              "point)", w.column("R"))
-        center = _center_r(name, w.values["R"], (start[first], start[second]), (end[first], end[second]), code,
-                           0.0005 if inch else 0.005, w.column("R"))
+        letter1, letter2 = LETTERS[first], LETTERS[second]
+        if not w.has(letter1) and not w.has(letter2):
+            raise MotionError(f"{letter1} and {letter2} words missing for arc in {plane_name} plane (an R arc needs "
+                              "its end point)", w.column("R"))
+        center: tuple[Number, Number] = _center_r(name, w.values["R"], (start[first], start[second]),
+                                                  (end[first], end[second]), code, 0.0005 if inch else 0.005,
+                                                  w.column("R"))
     else:
         if not w.has(off1) and not w.has(off2):
             raise MotionError(f"{off1} and {off2} words missing for arc in {plane_name} plane (give the centre, or R)",
@@ -234,7 +235,7 @@ def spline(interp: Interpreter, w: Words, code: int) -> None:
                 raise MotionError("G5: I and J are needed on the first spline", w.g_columns.get(1, 0))
             i, j = last[0], last[1]  # type: ignore[index]
         p, q = w.values["P"], w.values["Q"]
-        points = (x0 + i, y0 + j, end[0] + p, end[1] + q, end[0], end[1])
+        points: tuple[Number, ...] = (x0 + i, y0 + j, end[0] + p, end[1] + q, end[0], end[1])
         s.cycle_values["spline"] = (-p, -q)  # type: ignore[assignment]
     else:
         if not (w.has("I") and w.has("J")):
@@ -318,14 +319,14 @@ def non_modal(interp: Interpreter, w: Words, g0: int) -> None:
     elif g0 in (520, 920):
         if not axes:
             raise MotionError(f"All axes missing with {code_name('G', g0)} (give the axis words)", column)
-        offset = list(s.axis_offset)
-        pos = list(s.position)
+        offsets = list(s.axis_offset)
+        moved = list(s.position)
         for i, letter in enumerate(LETTERS):
             if letter in axes:
-                new = axes[letter] if g0 == 520 else pos[i] + offset[i] - axes[letter]
-                pos[i] = pos[i] + offset[i] - new
-                offset[i] = new
-        _set_axis_offset(interp, tuple(offset), tuple(pos), store=True)
+                new = axes[letter] if g0 == 520 else moved[i] + offsets[i] - axes[letter]
+                moved[i] = moved[i] + offsets[i] - new
+                offsets[i] = new
+        _set_axis_offset(interp, tuple(offsets), tuple(moved), store=True)
     elif g0 == 921:
         _set_axis_offset(interp, ZERO9, tuple(p + o for p, o in zip(s.position, s.axis_offset, strict=True)),
                          store=True)

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from fractions import Fraction
+from typing import Any
 
 from cosim.controllers.pokeys.gcode.syntax import Binary, Exists, Expr, Func, Neg, Num, Param
 
@@ -128,7 +129,7 @@ class Parameters:
         raise EvalError(f"cannot evaluate {expr!r}")  # pragma: no cover
 
 
-def binary(op: str, a: Number, b: Number) -> Number:
+def binary(op: str, a: Any, b: Any) -> Number:
     """``a op b`` as LinuxCNC computes it."""
     if op == "+":
         return _finite(a + b)
@@ -175,7 +176,7 @@ def binary(op: str, a: Number, b: Number) -> Number:
     raise EvalError(f"unknown operator {op!r}")  # pragma: no cover
 
 
-def function(name: str, args: list[Number]) -> Number:
+def function(name: str, args: list[Any]) -> Number:
     """``name[args]`` (angles in degrees)."""
     x = args[0]
     if name == "atan":
@@ -214,7 +215,7 @@ def function(name: str, args: list[Number]) -> Number:
     raise EvalError(f"unknown function {name!r}")  # pragma: no cover
 
 
-def _finite(value: Number) -> Number:
+def _finite(value: Any) -> Number:
     if isinstance(value, float) and not math.isfinite(value):
         raise EvalError("the result is not a finite number")
     if not isinstance(value, float) and abs(value) > LARGEST_RESULT:
@@ -222,15 +223,15 @@ def _finite(value: Number) -> Number:
     return value
 
 
-def _integer(value: Number) -> int | None:
-    """``value`` as an integer if within 0.0001 of one (LinuxCNC's rule for indices and codes)."""
-    if isinstance(value, float) and not math.isfinite(value):
+def _integer(value: Any) -> int | None:
+    """``value`` as an integer if within 0.0001 of one (LinuxCNC's rule for indices and codes); None if not."""
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return None
     n = round(value)
     return int(n) if abs(value - n) < TOLERANCE_EQUAL else None
 
 
-def integer(value: Number) -> int | None:
+def integer(value: Number | None) -> int | None:
     """Public form of :func:`_integer`."""
     return _integer(value)
 

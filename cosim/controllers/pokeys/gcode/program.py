@@ -143,13 +143,14 @@ class _Follower:
                 self.spindle = self.pending
             self.pending = None
 
-    def _spin(self, line: int, **change: object) -> None:
+    def _spin(self, line: int, *, on: bool | None = None, ccw: bool | None = None,
+              rpm: Number | None = None) -> None:
         base = self.pending or self.spindle
-        values = {"on": base.on, "ccw": base.ccw, "speed": base.speed, **change}
-        self.pending = Spindle(bool(values["on"]), bool(values["ccw"]), _exact(values["speed"]), line)  # type: ignore
+        self.pending = Spindle(base.on if on is None else on, base.ccw if ccw is None else ccw,
+                               base.speed if rpm is None else _exact(rpm), line)
 
     def _set_spindle_speed(self, line: int, _spindle: int, speed: Number) -> None:
-        self._spin(line, speed=speed)
+        self._spin(line, rpm=speed)
 
     def _start_spindle_clockwise(self, line: int, *_: object) -> None:
         self._spin(line, on=True, ccw=False)
@@ -215,7 +216,7 @@ class _Follower:
         p: list[Number] = [0] * 9
         p[i1], p[i2], p[normal] = e1, e2, normal_end
         p[3:] = rest
-        self._check_rest(p, line)
+        self._check_rest(tuple(p), line)
         end = self.machine(tuple(p))
         # the centre through the same transformation (a point on the plane at the centre)
         q: list[Number] = list(p)

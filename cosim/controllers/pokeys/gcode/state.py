@@ -7,7 +7,7 @@ and the tool offset are kept in program units and converted when G20/G21 changes
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 
 from cosim.controllers.pokeys.gcode.params import Number
@@ -83,4 +83,4 @@ class State:
     comp_programmed: tuple[Number, ...] = ZERO9  # the programmed point under compensation (position: the tool's)
 
     def copy(self) -> State:
-        return State(**{k: (dict(v) if isinstance(v, dict) else v) for k, v in self.__dict__.items()})
+        return replace(self, cycle_values=dict(self.cycle_values), motion_outputs=dict(self.motion_outputs))

@@ -225,7 +225,7 @@ def parse_line(text: str, number: int = 1) -> SourceLine:
     except UnexpectedInput as exc:
         raise _syntax_error(exc, normalized, columns, text) from None
     try:
-        return _Build(columns, text, number).transform(tree)  # type: ignore[no-any-return]
+        return _Build(columns, text, number).transform(tree)
     except VisitError as exc:  # pragma: no cover - the transformer does not raise for a parsed tree
         raise GcodeSyntaxError(str(exc.orig_exc), 1) from None
 
@@ -237,9 +237,9 @@ def _column(columns: list[int], index: int, text: str) -> int:
 
 
 def _syntax_error(exc: UnexpectedInput, normalized: str, columns: list[int], text: str) -> GcodeSyntaxError:
-    pos = getattr(exc, "pos_in_stream", None)
+    pos: int = getattr(exc, "pos_in_stream", None) or 0
     if isinstance(exc, UnexpectedCharacters):
-        index = exc.pos_in_stream
+        index: int = exc.pos_in_stream or 0
         char = normalized[index]
         column = _column(columns, index, text)
         written = text[column - 1] if 0 < column <= len(text) else char
@@ -256,7 +256,8 @@ def _syntax_error(exc: UnexpectedInput, normalized: str, columns: list[int], tex
     if isinstance(exc, UnexpectedToken | UnexpectedEOF):
         token = getattr(exc, "token", None)
         at_end = token is None or token.type == "$END"
-        index = len(normalized) if at_end else (token.start_pos if token.start_pos is not None else pos or 0)
+        index = len(normalized) if at_end or token is None else (token.start_pos if token.start_pos is not None
+                                                                  else pos)
         column = _column(columns, index, text)
         before = normalized[:index]
         found = "the end of the line" if at_end else repr(str(token))
@@ -279,7 +280,7 @@ def _number(text: str) -> Fraction:
 
 
 @v_args(inline=True)
-class _Build(Transformer):  # type: ignore[type-arg]
+class _Build(Transformer):
     def __init__(self, columns: list[int], text: str, number: int) -> None:
         super().__init__()
         self.columns = columns
