@@ -45,8 +45,8 @@ def block(interp: Interpreter, w: Words) -> None:
         if tool is None or tool < 0:
             raise WordError(f"Negative tool number or not an integer: T{show(w.values['T'])}", w.column("T"))
         if tool and tool not in interp.tools:
-            raise WordError(f"Requested tool {tool} not found in the tool table (add it to [host.tools] in the "
-                            "machine file)", w.column("T"))
+            raise WordError(f"Requested tool {tool} not found in the tool table (add a [[host.tool]] table for "
+                            "it to the machine file)", w.column("T"))
         s.selected = tool
         interp.emit("SELECT_TOOL", tool)
     if 5 in m:
@@ -215,8 +215,8 @@ def _tool_change(interp: Interpreter, w: Words, code: int) -> None:
     if n is None or n < 0:
         raise WordError("M61 needs Q, a tool number (>= 0)", w.m_columns[6])
     if n and n not in interp.tools:
-        raise WordError(f"Requested tool {n} not found in the tool table (add it to [host.tools] in the machine "
-                        "file)", w.m_columns[6])
+        raise WordError(f"Requested tool {n} not found in the tool table (add a [[host.tool]] table for it "
+                        "to the machine file)", w.m_columns[6])
     s.tool = n
     interp.params.numbered[5400] = n
     interp.emit("CHANGE_TOOL_NUMBER", n)
