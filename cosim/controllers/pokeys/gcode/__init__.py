@@ -4,7 +4,7 @@ The front end is in layers, each a module with one job::
 
     text ──syntax.py──> SourceLine (words, parameter settings, O-word; values unevaluated)
          ──flow.py────> SourceFile (a file parsed whole, O-word labels indexed; subroutine files)
-         ──interpreter.py (+ words, params, execute, motion, cycles, messages)──> CanonProgram
+         ──interpreter.py (+ ocode, words, params, execute, motion, cycles, compensation, messages)──> CanonProgram
                         (canonical calls named and shaped like rs274's: STRAIGHT_FEED, ARC_FEED, ...)
          ──program.py──> Toolpath (machine coordinates and units: moves, pauses, outputs, path control)
          ──pathplan.plan_toolpath──> per-slot counts

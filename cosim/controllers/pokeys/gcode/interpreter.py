@@ -1,7 +1,7 @@
 """Running a G-code program into canonical calls, as LinuxCNC 2.9's interpreter does.
 
 :class:`Interpreter` runs the lines of a :class:`~.flow.SourceFile` with O-word control flow and
-subroutines, evaluates each line's words (parameter settings take effect after the words are
+subroutines (:mod:`.ocode`), evaluates each line's words (parameter settings take effect after the words are
 read, before the line runs), and executes them in RS274/NGC's order of execution (the
 :data:`ORDER` below), producing a :class:`~.canon.CanonProgram`. Motion is in :mod:`.motion`,
 canned cycles in :mod:`.cycles`, comments and messages in :mod:`.messages`.
@@ -15,15 +15,14 @@ motion (``G33``, ``G33.1``, ``G76``), probing without a probe input (``G38.n``) 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from cosim.controllers.pokeys.gcode import compensation, execute, messages
+from cosim.controllers.pokeys.gcode import compensation, execute, messages, ocode
 from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
-from cosim.controllers.pokeys.gcode.flow import Label, Library, ProgramError, SourceFile, Stop, literal_label
-from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters, integer, show
+from cosim.controllers.pokeys.gcode.flow import Library, ProgramError, SourceFile, Stop
+from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters
 from cosim.controllers.pokeys.gcode.state import MM_PER_INCH, ZERO9, State, Tool
 from cosim.controllers.pokeys.gcode.syntax import SourceLine
 from cosim.controllers.pokeys.gcode.words import WordError, Words, check_uses, code_name, evaluate_line
@@ -31,22 +30,11 @@ from cosim.controllers.pokeys.gcode.words import WordError, Words, check_uses, c
 ORDER = ("comment", "feed mode G93-G95", "F", "S", "T", "M62-M68", "M6 M61", "M3 M4 M5 M19", "M70-M73",
          "M7 M8 M9", "M48-M53", "M100-M199", "G4", "G17-G19", "G20 G21", "G40-G42", "G43 G49", "G54-G59.3",
          "G61 G64", "G90 G91", "G98 G99", "G10 G28 G30 G52 G92", "motion", "M0 M1 M2 M30 M60")
-MAX_CALL_DEPTH = 70
 UNSUPPORTED_MOTION = {330: "G33 (spindle-synchronised motion) needs a spindle encoder: cosim models no spindle "
                            "feedback",
                       331: "G33.1 (rigid tapping) needs a spindle encoder: cosim models no spindle feedback",
                       760: "G76 (threading) is spindle-synchronised: cosim models no spindle feedback"}
 PROBES = (382, 383, 384, 385)
-
-
-@dataclass
-class _Frame:
-    file: SourceFile
-    pc: int
-    saved: list[Number] | None = None
-    label: Label | None = None
-    repeats: dict[int, int] = field(default_factory=dict)
-    call_where: str = ""
 
 
 class Interpreter:
@@ -97,7 +85,7 @@ class Interpreter:
         self.value: Number = 0
         self.value_returned = 0
         self.saved_states: list[State] = []
-        self.frames: list[_Frame] = []
+        self.frames: list[ocode.Frame] = []
         self.comp_queue = compensation.Queue()
         self.canon_tlo: tuple[Number, ...] = ZERO9
         self.canon_machine: tuple[Number, ...] = ZERO9  # where the last canonical move ended (machine coordinates)
@@ -151,7 +139,7 @@ class Interpreter:
     def run(self, main: SourceFile) -> CanonProgram:
         """Run ``main`` to its end; the canonical program (raises ``ProgramError``)."""
         self.program = CanonProgram(main.path)
-        self.frames = [_Frame(main, main.start)]
+        self.frames = [ocode.Frame(main, main.start)]
         executed = 0
         try:
             while True:
@@ -162,7 +150,7 @@ class Interpreter:
                     compensation.dequeue(self)
                     if len(self.frames) > 1:
                         raise ProgramError(source.where(frame.pc - 1), f"the file ended inside subroutine "
-                                           f"{_label_text(frame.label)} (no endsub)")
+                                           f"{ocode.label_text(frame.label)} (no endsub)")
                     if source.stop is not None:
                         self.where, self.line = source.where(source.stop), source.stop + 1
                         self.program.end, self.program.end_where = "%", self.where
@@ -179,7 +167,7 @@ class Interpreter:
                     continue
                 try:
                     if line.oword is not None:
-                        self._oword(line, frame)
+                        ocode.oword(self, line, frame)
                     elif not line.empty or line.comments:
                         self._line(line)
                 except (WordError, EvalError) as exc:
@@ -189,175 +177,6 @@ class Interpreter:
             return self.program
 
     # -- O-words -----------------------------------------------------------------------------------
-    def _oword(self, line: SourceLine, frame: _Frame) -> None:
-        o = line.oword
-        assert o is not None
-        if line.words or line.settings:
-            raise ProgramError(f"{self.where}:{line.words[0].column if line.words else o.column}",
-                               f"O-word `{o.keyword}`: no other words are allowed on an O-word line")
-        source = frame.file
-        label = literal_label(o.label)
-        if label is None:
-            try:
-                value = self.params.evaluate(o.label)  # type: ignore[arg-type]
-            except EvalError as exc:
-                raise ProgramError(f"{self.where}:{o.column}", f"O-word label: {exc}") from None
-            n = integer(value)
-            if n is None:
-                raise ProgramError(f"{self.where}:{o.column}", f"O-word label {show(value)} is not an integer")
-            label = n
-        kw = o.keyword
-        here = frame.pc - 1
-        name = f"O-word `{kw}`"
-
-        def args() -> list[Number]:
-            try:
-                return [self.params.evaluate(a) for a in o.args]
-            except EvalError as exc:
-                raise ProgramError(f"{self.where}:{o.column}", f"{name}: {exc}") from None
-
-        def need(index: int | None, what: str) -> int:
-            if index is None:
-                raise ProgramError(f"{self.where}:{o.column}", f"{name} {_label_text(label)}: no matching {what}")
-            return index
-
-        if kw == "sub":
-            end = need(source.partner(label, here, ("endsub",)), "endsub")
-            frame.pc = end + 1
-        elif kw in ("endsub", "return"):
-            values = args()
-            if len(self.frames) == 1:
-                if kw == "endsub":
-                    raise ProgramError(f"{self.where}:{o.column}", f"{name} {_label_text(label)} outside a subroutine")
-                raise ProgramError(f"{self.where}:{o.column}", f"{name} outside a subroutine")
-            self.value = values[0] if values else 0
-            self.value_returned = 1 if values else 0
-            done = self.frames.pop()
-            assert done.saved is not None
-            self.params.leave(done.saved)
-            marker = done.repeats.get(-1)
-            if marker is not None and len(self.saved_states) >= marker:
-                saved = self.saved_states[marker - 1]
-                del self.saved_states[marker - 1:]
-                execute.restore(self, saved)
-        elif kw == "call":
-            self._call(label, args(), o.column)
-        elif kw == "if":
-            self._if(label, here, args(), frame, o.column)
-        elif kw in ("elseif", "else"):
-            # reached by running the branch before it: skip to endif
-            frame.pc = need(source.partner(label, here, ("endif",)), "endif") + 1
-        elif kw == "endif":
-            pass
-        elif kw == "while":
-            cond = _truth(args(), name, self.where, o.column)
-            if source.is_do_while(label, here):
-                if cond:
-                    frame.pc = need(source.partner(label, here, ("do",), backward=True), "do") + 1
-            elif not cond:
-                frame.pc = need(source.partner(label, here, ("endwhile",)), "endwhile") + 1
-        elif kw == "endwhile":
-            frame.pc = need(source.partner(label, here, ("while",), backward=True), "while")
-        elif kw == "do":
-            pass
-        elif kw == "repeat":
-            values = args()
-            count = integer(values[0]) if values else None
-            if count is None:
-                raise ProgramError(f"{self.where}:{o.column}", f"{name} needs a whole number of repeats [n]")
-            end = need(source.partner(label, here, ("endrepeat",)), "endrepeat")
-            if count <= 0:
-                frame.pc = end + 1
-            else:
-                frame.repeats[end] = count
-        elif kw == "endrepeat":
-            left = frame.repeats.get(here, 1) - 1
-            if left > 0:
-                frame.repeats[here] = left
-                frame.pc = need(source.partner(label, here, ("repeat",), backward=True), "repeat") + 1
-            else:
-                frame.repeats.pop(here, None)
-        elif kw in ("break", "continue"):
-            self._loop_jump(kw, label, here, frame, need)
-
-    def _if(self, label: Label, here: int, values: list[Number], frame: _Frame, column: int) -> None:
-        source = frame.file
-        index = here
-        cond = _truth(values, "O-word `if`", self.where, column)
-        if source.partner(label, here, ("endif",)) is None:
-            raise ProgramError(f"{self.where}:{column}", f"O-word `if` {_label_text(label)}: no matching endif")
-        while not cond:
-            nxt = source.partner(label, index, ("elseif", "else", "endif"))
-            if nxt is None:
-                raise ProgramError(f"{self.where}:{column}", f"O-word `if` {_label_text(label)}: no matching endif")
-            kw = source.lines[nxt].oword.keyword  # type: ignore[union-attr]
-            if kw != "elseif":
-                frame.pc = nxt + 1
-                return
-            line = source.lines[nxt]
-            assert line.oword is not None
-            try:
-                cond = _truth([self.params.evaluate(a) for a in line.oword.args], "O-word `elseif`",
-                              source.where(nxt), line.oword.column)
-            except EvalError as exc:
-                raise ProgramError(source.where(nxt, line.oword.column), f"O-word `elseif`: {exc}") from None
-            index = nxt
-        frame.pc = index + 1
-
-    def _loop_jump(self, kw: str, label: Label, here: int, frame: _Frame, need: object) -> None:
-        source = frame.file
-        head = source.partner(label, here, ("while", "do", "repeat"), backward=True)
-        if head is None:
-            raise ProgramError(self.where, f"O-word `{kw}` {_label_text(label)} outside a loop")
-        head_kw = source.lines[head].oword.keyword  # type: ignore[union-attr]
-        if head_kw == "repeat":
-            end = source.partner(label, here, ("endrepeat",))
-        elif head_kw == "do":
-            end = source.partner(label, here, ("while",))
-        else:
-            end = source.partner(label, here, ("endwhile",))
-        if end is None:
-            raise ProgramError(self.where, f"O-word `{kw}` {_label_text(label)}: the loop has no end")
-        if kw == "break":
-            frame.repeats.pop(end, None)
-            frame.pc = end + 1
-        elif head_kw == "while":
-            frame.pc = head
-        else:
-            frame.pc = end  # do-while: its while; repeat: its endrepeat
-
-    def _call(self, label: Label, values: list[Number], column: int) -> None:
-        if len(values) > 30:
-            raise ProgramError(f"{self.where}:{column}", "O-word `call`: at most 30 arguments")
-        if len(self.frames) >= MAX_CALL_DEPTH:
-            raise ProgramError(f"{self.where}:{column}", f"O-word `call` {_label_text(label)}: subroutines nested "
-                                                         f"more than {MAX_CALL_DEPTH} deep")
-        current = self.frames[-1].file
-        main = self.frames[0].file
-        target: SourceFile | None = None
-        index: int | None = None
-        for source in (current, main):
-            index = source.sub(label)
-            if index is not None:
-                target = source
-                break
-        if target is None and isinstance(label, str):
-            target = self.library.find(label, main.path)
-            if target is not None:
-                index = target.sub(label)
-                if index is None:
-                    raise ProgramError(f"{self.where}:{column}", f"O-word `call` <{label}>: {target.path} does "
-                                                                 f"not define o<{label}> sub")
-        if target is None or index is None:
-            where = (f"; no {label}.ngc on the subroutine search path (host.subroutine_path) or beside the program"
-                     if isinstance(label, str) else "")
-            raise ProgramError(f"{self.where}:{column}", f"O-word `call` {_label_text(label)}: the subroutine is "
-                                                         f"not defined{where}")
-        saved = self.params.enter(values)
-        self.value_returned = 0
-        self.frames.append(_Frame(target, index + 1, saved, label, call_where=self.where))
-
-    # -- one line ----------------------------------------------------------------------------------
     def _line(self, line: SourceLine) -> None:
         state = self.state
         words = evaluate_line(line, self.params)
@@ -425,18 +244,6 @@ class Interpreter:
     # -- predefined parameters ---------------------------------------------------------------------
     def _predefined(self, name: str) -> Number | None:
         return messages.predefined(self, name)
-
-
-def _truth(values: list[Number], name: str, where: str, column: int) -> bool:
-    if not values:
-        raise ProgramError(f"{where}:{column}" if column else where, f"{name} needs a condition [expression]")
-    return values[0] != 0
-
-
-def _label_text(label: Label | None) -> str:
-    if isinstance(label, str):
-        return f"o<{label}>"
-    return f"o{label}"
 
 
 __all__ = ["ORDER", "ZERO9", "Interpreter", "ProgramError", "Stop", "Tool"]
