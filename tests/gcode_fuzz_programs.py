@@ -157,12 +157,22 @@ def seeds() -> list[str]:
     return [p.read_text() for p in SEEDS if p.is_file()]
 
 
+def short(rng: random.Random) -> str:
+    """One to three lines (a word, a setting, an O-word, a whole construct), perhaps mutated."""
+    lines = [valid_line(rng) if rng.random() < 0.5 else line(rng) for _ in range(rng.randint(1, 3))]
+    text = "\n".join(lines) + rng.choice(["\nM2\n", "\n", ""])
+    return mutate(rng, text) if rng.random() < 0.3 else text
+
+
 def draw(rng: random.Random, seed_texts: list[str]) -> str:
+    """70 % short inputs, 15 % generated programs, 10 % mutated programs, 5 % random text."""
     roll = rng.random()
-    if roll < 0.5:
+    if roll < 0.7:
+        return short(rng)
+    if roll < 0.85:
         return generate(rng)
-    if roll < 0.9:
-        return mutate(rng, rng.choice(seed_texts) if seed_texts and roll < 0.75 else generate(rng))
+    if roll < 0.95:
+        return mutate(rng, rng.choice(seed_texts) if seed_texts and roll < 0.9 else generate(rng))
     return random_text(rng)
 
 
