@@ -109,6 +109,18 @@ values = [1]
     assert console(tmp_path, "pokeys.job") == ["LIMIT: pokeys: stopped by a limit switch (engine state 100)"]
 
 
+def test_the_emergency_input_stops_the_job_with_state_emergency(tmp_path: Path) -> None:
+    machine = MACHINE + """
+[[stimulus]]
+signal = "pokeys.emergency"
+at = ["300 ms"]
+values = [1]
+"""
+    _, trace = run(tmp_path, "G21 G1 X100 F600\nM2\n", machine)
+    assert edges(trace, "pokeys.job")[-1][1] == JobState.EMERGENCY
+    assert console(tmp_path, "pokeys.job") == ["EMERGENCY: pokeys: stopped by the emergency input (engine state 101)"]
+
+
 def test_coolant_tool_change_and_pause_are_signals_with_the_machine_files_times(tmp_path: Path) -> None:
     _, trace = run(tmp_path, "G21 M8\nG1 X5 F600\nM9\nT1 M6\nM0\nG1 X0\nM2\n")
     flood = edges(trace, "pokeys.coolant_flood")
