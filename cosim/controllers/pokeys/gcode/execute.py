@@ -14,6 +14,8 @@ from cosim.controllers.pokeys.gcode.words import WordError, Words
 if TYPE_CHECKING:
     from cosim.controllers.pokeys.gcode.interpreter import Interpreter
 
+MAX_DWELL_S = 86_400
+"""The longest dwell simulated [s] (a day; the engine would hold that many empty slots)."""
 PLANES = {170: "XY", 180: "XZ", 190: "YZ", 171: "UV", 181: "WU", 191: "VW"}
 FEED_MODES = {940: 0, 930: 1, 950: 2}
 
@@ -87,6 +89,8 @@ def block(interp: Interpreter, w: Words) -> None:
         if p is None or p < 0:
             raise WordError("Dwell time missing with G4 (G4 P seconds, P >= 0)" if p is None else
                             f"Dwell time P{show(p)} is negative", w.g_columns[0])
+        if p > MAX_DWELL_S:
+            raise WordError(f"G4 P{show(p)}: a dwell of more than {MAX_DWELL_S} s is not simulated", w.column("P"))
         interp.emit("DWELL", p)
     if 2 in g:
         s.plane = g[2]

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters, integer, show
+from cosim.controllers.pokeys.gcode.params import LARGEST, EvalError, Number, Parameters, integer, show
 from cosim.controllers.pokeys.gcode.syntax import SourceLine, Word
 
 #: G codes x 10 by modal group (LinuxCNC 2.9).
@@ -102,6 +102,9 @@ def evaluate_line(line: SourceLine, params: Parameters) -> Words:
             value = params.evaluate(word.expr)
         except EvalError as exc:
             raise WordError(f"{word.letter} word: {exc}", word.column) from None
+        if abs(value) > LARGEST:  # type: ignore[operator]
+            raise WordError(f"{word.letter} word: {float(value):.6g} is out of range (at most {LARGEST:.0e} in size)",
+                            word.column)
         if word.letter == "G":
             _g(words, word, value)
         elif word.letter == "M":
