@@ -74,6 +74,7 @@ def test_a_binary_file_is_not_gcode(tmp_path: Path) -> None:
     ("o<nothere> call\n", r"^p.nc:1:12: O-word `call` o<nothere>: the subroutine is not defined; no nothere.ngc on "
                           r"the subroutine search path"),
     ("G5.2 X1 Y1 P1 L3 F10\n", r"^p.nc:1:1: G5.2 \(NURBS\) is not supported"),
+    ("G71 Q1 X1 Z1 D1 I1 R1\n", r"^p.nc:1:1: G71 \(lathe roughing cycle\) is not supported"),
 ])
 def test_what_this_machine_cannot_simulate_is_refused_by_name_with_file_line_and_column(text: str,
                                                                                         message: str) -> None:

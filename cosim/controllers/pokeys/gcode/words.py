@@ -120,8 +120,17 @@ def evaluate_line(line: SourceLine, params: Parameters) -> Words:
     return words
 
 
+#: G codes of LinuxCNC 2.9 that are not simulated here, by name.
+NOT_SIMULATED = {700: "G70 (lathe finishing cycle)", 710: "G71 (lathe roughing cycle)",
+                 711: "G71.1 (lathe roughing cycle)", 712: "G71.2 (lathe roughing cycle)",
+                 720: "G72 (lathe facing cycle)", 721: "G72.1 (lathe facing cycle)", 722: "G72.2 (lathe facing cycle)"}
+
+
 def _g(words: Words, word: Word, value: Number) -> None:
     code = integer(value * 10)
+    if code in NOT_SIMULATED:
+        raise WordError(f"{NOT_SIMULATED[code]} is not supported: the host of a PoKeys mill or router runs no lathe "
+                        "cycles", word.column)
     if code is None or code not in G_GROUP:
         text = f"G{show(value)}"
         raise WordError(f"Unknown G code used: {text}" if value < 100 else f"G code out of range: {text}", word.column)
