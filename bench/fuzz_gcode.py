@@ -3,12 +3,13 @@
 The inputs come from ``tests/gcode_fuzz_programs.draw``: 70 % are one to three lines (words of every modal
 group, parameters, expressions, O-words, comments, odd numbers; some mutated), 15 % whole generated
 programs, 10 % mutations of those or of the bundled programs (characters inserted, deleted or replaced,
-every kind of line end, lines swapped), 5 % random text. Each input is parsed, interpreted (an endless loop is refused after 20,000 lines) and turned into a
-tool path. A crash is any exception that is not one of the project's own errors
-(:class:`cosim.errors.CosimError`); the first ones are written to ``--crashes`` with their traceback. An
-input that takes more than ``SLOW_S`` of wall time is counted as slow and written there too.
+every kind of line end, lines swapped), 5 % random text. Each input is parsed, interpreted (an endless
+loop is refused after 20,000 lines) and turned into a tool path. A crash is any exception that is not
+one of the project's own errors (:class:`cosim.errors.CosimError`); the first ones are written to
+``--crashes`` with their traceback. An input that takes more than ``SLOW_S`` of wall time is counted as
+slow and written there too.
 
-Run (``--workers`` processes, each with its own seed, for ``--minutes``)::
+Run (``--workers`` processes, each with its own seed, ``--inputs`` in all or for ``--minutes``)::
 
     .venv/bin/python bench/fuzz_gcode.py --inputs 1000000 --workers 2
 """
