@@ -35,7 +35,7 @@ BIN = VENV / ("Scripts" if os.name == "nt" else "bin")
 PY = BIN / ("python.exe" if os.name == "nt" else "python")
 KERNEL = "cosim"
 #: Debian packages the test suite uses, by the command each provides (tests that need one skip without it).
-TEST_PACKAGES = {"sigrok-cli": "sigrok-cli", "chromium": "chromium", "vcd2fst": "gtkwave"}
+TEST_PACKAGES = {"sigrok-cli": "sigrok-cli", "chromium": "chromium", "vcd2fst": "gtkwave", "rs274": "linuxcnc-uspace"}
 
 
 def _say(text: str) -> None:

@@ -181,7 +181,7 @@ def programs(draw: st.DrawFn) -> str:
     lines = ["G21 G90"]
     x = y = Fraction(0)
     for _ in range(draw(st.integers(1, 5))):
-        feed = draw(st.integers(1, 20_000))
+        feed = draw(st.integers(60, 20_000))  # from 1 mm/min a 60 mm arc is 3.7 million slots: slow, not harder
         kind = draw(st.sampled_from(["G0", "G1", "G2", "G3"]))
         nx, ny, nz = (Fraction(draw(_coord)) for _ in range(3))
         if kind in ("G2", "G3"):  # centre offsets; the end goes on the circle through the start

@@ -24,10 +24,14 @@ from cosim.trace import Trace
 pytestmark = pytest.mark.fmu
 
 
+#: Signals added after the digests were taken (the third wave's job signal, cosim.job): left out.
+ADDED_LATER = frozenset({"pokeys.job"})
+
+
 def trace_digest(trace: Trace) -> str:
     """SHA-256 over every signal's name, pulses or changes: instants as int64, values as float64."""
     h = hashlib.sha256()
-    for name in sorted(trace.names()):
+    for name in sorted(set(trace.names()) - ADDED_LATER):
         t, v = trace.pulses(name) if trace.info[name].kind == "pulse" else trace.edges(name)
         h.update(name.encode())
         h.update(np.asarray(t, dtype="<i8").tobytes())

@@ -1,7 +1,8 @@
 """Following a streamed job through the engine: when its slots run, and the outputs that go with them.
 
-The host knows where in its job a spindle (or laser) command falls: before slot ``n``. It
-switches the output when the engine takes that slot from the buffer, at that slot's start
+The host knows where in its job a spindle (or laser) command, a coolant or tool change, a pause
+or an output word falls: before slot ``n``. It switches the output when the engine takes that
+slot from the buffer, at that slot's start
 (priority ``HOST``, after the engine's ``SLOT``), so the output changes between the motion before
 the command and the motion after it, wherever underruns or the prefill have moved the job in
 time. :class:`JobWatch` also records when the job's first and last slots ran (its job time).
@@ -13,11 +14,11 @@ slot at most), so it costs a few kernel events per mark, not one per slot.
 
 from __future__ import annotations
 
-from collections.abc import Generator, Sequence
+from collections.abc import Callable, Generator, Sequence
 from typing import Any
 
 from cosim.controllers.pokeys.engine import PulseEngine
-from cosim.controllers.pokeys.toolpath import Spindle
+from cosim.controllers.pokeys.toolpath import Message, Output, Spindle
 from cosim.kernel import Simulation
 from cosim.signals import Signal
 from cosim.timebase import Priority
@@ -34,8 +35,10 @@ class JobWatch:
         The engine the job is streamed into (its buffer's taken count must start at 0 with the job).
     slots : int
         Entries in the job.
-    outputs : sequence of (int, Spindle)
-        Spindle states and the index of the job slot they start at (``slots``: after the last one).
+    outputs : sequence of (int, Spindle or Output)
+        Output changes and the index of the job slot they start at (``slots``: after the last one).
+    on_end : callable, optional
+        Called (no arguments) at the start of the slot after the job's last one: the buffer has drained.
 
     Attributes
     ----------
@@ -43,10 +46,15 @@ class JobWatch:
         Start of the slot that took the job's first and last entry [ticks].
     spindle_on, spindle_ccw, spindle_speed : Signal
         ``<engine>.spindle.on`` (M3/M4 = 1, M5 = 0), ``.ccw`` (M4), ``.speed`` (S).
+    signals : dict of str to Signal
+        ``<engine>.<name>`` of every :class:`~cosim.controllers.pokeys.toolpath.Output` of the job
+        (``coolant_flood``, ``coolant_mist``, ``tool``, ``tool_changing``, ``paused``, ``dout<n>``,
+        ``aout<n>``), from 0.
     """
 
     def __init__(self, sim: Simulation, engine: PulseEngine, *, slots: int,
-                 outputs: Sequence[tuple[int, Spindle]] = ()) -> None:
+                 outputs: Sequence[tuple[int, Spindle | Output | Message]] = (),
+                 on_end: Callable[[], None] | None = None) -> None:
         self.sim = sim
         self.engine = engine
         self.slots = integer(slots, "job slots", low=0)
@@ -55,15 +63,23 @@ class JobWatch:
         self.spindle_ccw = Signal(sim, f"{name}.spindle.ccw", description="spindle counter-clockwise (M4)")
         self.spindle_speed = Signal(sim, f"{name}.spindle.speed", kind="real", description="spindle speed (S word)")
         self.outputs = sorted(outputs, key=lambda item: item[0])
-        for index, _ in self.outputs:
+        self.signals: dict[str, Signal] = {}
+        for index, record in self.outputs:
             integer(index, "output slot", low=0, high=self.slots)
+            if isinstance(record, Output) and record.name not in self.signals:
+                self.signals[record.name] = Signal(sim, f"{name}.{record.name}", kind=_kind(record.name),
+                                                   description=_DESCRIPTIONS.get(record.name.rstrip("0123456789"),
+                                                                                 "a G-code output"))
+        self.on_end = on_end
         self.t_first: int | None = None
         self.t_last: int | None = None
         if self.slots:
             sim.process(self.follow_job())
         else:
-            for _, spindle in self.outputs:
-                self._apply(spindle)
+            for _, record in self.outputs:
+                self._apply(record)
+            if on_end is not None:
+                on_end()
 
     @property
     def job_ticks(self) -> int | None:
@@ -84,10 +100,12 @@ class JobWatch:
                 self.t_last = t
             while pending and pending[0][0] == index:
                 self._apply(pending.pop(0)[1])
-        if pending:  # after the job: at the start of the slot after its last one
-            yield self.sim.at(self.sim.now + self.engine.slot_ticks, Priority.HOST)
-            for _, spindle in pending:
-                self._apply(spindle)
+        # after the job: at the start of the slot after its last one
+        yield self.sim.at(self.sim.now + self.engine.slot_ticks, Priority.HOST)
+        for _, record in pending:
+            self._apply(record)
+        if self.on_end is not None:
+            self.on_end()
 
     def _taken(self, index: int) -> Generator[Any, Any, int]:
         """Wait until entry ``index`` is taken; the start of the slot that took it [ticks]."""
@@ -98,7 +116,27 @@ class JobWatch:
             yield self.sim.at(max(t, self.sim.now), Priority.HOST)
         return engine.t0 + (engine.slot_index - 1 - (engine.buffer.taken - 1 - index)) * slot
 
-    def _apply(self, spindle: Spindle) -> None:
-        self.spindle_on.set(int(spindle.on))
-        self.spindle_ccw.set(int(spindle.ccw))
-        self.spindle_speed.set(float(spindle.speed))
+    def _apply(self, record: Spindle | Output | Message) -> None:
+        if isinstance(record, Message):
+            self.sim.trace.write_line(self.sim.now, "gcode", f"{record.kind}: {record.text}" if record.kind == "MSG"
+                                      else record.text)
+            return
+        if isinstance(record, Output):
+            signal = self.signals[record.name]
+            signal.set(float(record.value) if signal.kind == "real" else int(record.value))
+            return
+        self.spindle_on.set(int(record.on))
+        self.spindle_ccw.set(int(record.ccw))
+        self.spindle_speed.set(float(record.speed))
+
+
+_DESCRIPTIONS = {"coolant_flood": "flood coolant (M8 on, M9 off)", "coolant_mist": "mist coolant (M7 on, M9 off)",
+                 "tool": "the tool in the spindle (M6, M61)", "tool_changing": "1 while a tool change (M6) runs",
+                 "paused": "1 while the program is paused (M0, M1, M60) until the operator resumes",
+                 "dout": "digital output (M62/M64 on, M63/M65 off)", "aout": "analog output (M67, M68)"}
+
+
+def _kind(name: str) -> str:
+    if name.startswith("aout"):
+        return "real"
+    return "int" if name == "tool" else "bit"

@@ -44,7 +44,7 @@ from functools import cached_property
 from math import isqrt, lcm
 
 from cosim.controllers.pokeys.limits import AXIS_NAMES, MAX_PULSES_PER_SLOT, SLOTS_PER_S
-from cosim.controllers.pokeys.toolpath import Arc, Line, Pause, Point, Spindle, Toolpath
+from cosim.controllers.pokeys.toolpath import Arc, Line, Message, Output, PathControl, Pause, Point, Spindle, Toolpath
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
 from cosim.validate import choice, in_range, integer, positive
@@ -146,7 +146,7 @@ class PlannedJob:
     counts: list[Counts]
     end_steps: tuple[int, ...]
     notes: tuple[str, ...] = ()
-    outputs: tuple[tuple[int, Spindle], ...] = ()
+    outputs: tuple[tuple[int, Spindle | Output | Message], ...] = ()
     segments: int = 0
     skipped: tuple[str, ...] = field(default=())
 
@@ -178,6 +178,8 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
             builder.flush()
             slots = math.ceil(step.seconds * SLOTS_PER_S)
             builder.counts.extend([(0,) * n_axes] * slots)
+        elif isinstance(step, PathControl):
+            builder.path_control(step)
         else:
             builder.flush()
             builder.outputs.append((len(builder.counts), step))
@@ -209,11 +211,20 @@ class _Builder:
         self.override = in_range(settings.feed_override, "feed_override", low=0, low_open=True, high=10)
         self.blend = settings.mode == "blend"
         self.deviation = float(positive(settings.tolerance, "tolerance")) * QUANTA_PER_UNIT
+        self.exact_path = False
         self.chain: list[tuple[Segment, tuple[float, ...]]] = []
+        self.corner_modes: list[tuple[bool, bool, float]] = []
         self.counts: list[Counts] = []
         self.notes: dict[int, str] = {}
-        self.outputs: list[tuple[int, Spindle]] = []
+        self.outputs: list[tuple[int, Spindle | Output | Message]] = []
         self.n_segments = 0
+
+    def path_control(self, step: PathControl) -> None:
+        """G61 / G61.1 / G64 P: how the corners after this point are passed (the machine's tolerance if no P)."""
+        self.blend = step.mode == "blend"
+        self.exact_path = step.mode == "exact_path"
+        tolerance = step.tolerance if step.tolerance is not None else self.settings.tolerance
+        self.deviation = float(positive(tolerance, "tolerance")) * QUANTA_PER_UNIT
 
     # -- geometry --------------------------------------------------------------------------------
     def line(self, end: Point, feed: Fraction | None, line: int) -> None:
@@ -221,23 +232,28 @@ class _Builder:
         self.segment([a.steps(p) for a, p in zip(self.axes, end, strict=True)], feed, line)
 
     def arc(self, arc: Arc) -> None:
+        i, j, k = {"xy": (0, 1, 2), "zx": (2, 0, 1), "yz": (1, 2, 0)}[arc.plane]
         start, end = self.position, arc.end
         cx, cy = float(arc.center[0]), float(arc.center[1])
-        x0, y0, x1, y1 = float(start[0]) - cx, float(start[1]) - cy, float(end[0]) - cx, float(end[1]) - cy
+        x0, y0, x1, y1 = float(start[i]) - cx, float(start[j]) - cy, float(end[i]) - cx, float(end[j]) - cy
         r0, r1 = math.hypot(x0, y0), math.hypot(x1, y1)
         a0, a1 = math.atan2(y0, x0), math.atan2(y1, x1)
-        full = (start[0], start[1]) == (end[0], end[1])
+        full = (start[i], start[j]) == (end[i], end[j])
         sweep = 2 * math.pi if full else ((a0 - a1) if arc.clockwise else (a1 - a0)) % (2 * math.pi)
+        sweep += 2 * math.pi * (arc.turns - 1)
         tol = float(positive(self.settings.arc_tolerance, "arc_tolerance"))
         r = max(r0, r1)
         step = MAX_CHORD_ANGLE if tol >= r else min(MAX_CHORD_ANGLE, 2 * math.acos(1 - tol / r))
         n = max(1, math.ceil(sweep / step))
         sign = -1 if arc.clockwise else 1
-        z0, z1 = float(start[2]), float(end[2])
-        for j in range(1, n):
-            f = j / n
+        z0, z1 = float(start[k]), float(end[k])
+        for step in range(1, n):
+            f = step / n
             angle, radius = a0 + sign * sweep * f, r0 + (r1 - r0) * f
-            point = (cx + radius * math.cos(angle), cy + radius * math.sin(angle), z0 + (z1 - z0) * f)
+            on_plane = [0.0, 0.0, 0.0]
+            on_plane[i], on_plane[j], on_plane[k] = (cx + radius * math.cos(angle), cy + radius * math.sin(angle),
+                                                     z0 + (z1 - z0) * f)
+            point = tuple(on_plane)
             self.segment([a.steps(Fraction(p)) for a, p in zip(self.axes, point, strict=True)], arc.feed, arc.line)
         self.line(end, arc.feed, arc.line)
 
@@ -275,6 +291,7 @@ class _Builder:
         self.steps = target
         end = (*target, *([0] * (self.n_axes - 3)))
         self.chain.append((Segment(start, end, length, vmax, accel, accel), tuple(u / norm for u in direction)))
+        self.corner_modes.append((self.blend, self.exact_path, self.deviation))
         self.n_segments += 1
 
     def note(self, line: int, wanted: Fraction, bound: tuple[Fraction, int], length: int, deltas: list[int]) -> None:
@@ -296,22 +313,27 @@ class _Builder:
         if not self.chain:
             return
         segments = [seg for seg, _ in self.chain]
-        if self.blend:
-            for k in range(len(segments) - 1):
-                corner = self.corner(segments[k], segments[k + 1], self.chain[k][1], self.chain[k + 1][1])
-                segments[k] = Segment(segments[k].start, segments[k].end, segments[k].length, segments[k].vmax,
-                                      segments[k].accel, segments[k].decel, corner)
+        for k in range(len(segments) - 1):
+            blend, exact_path, deviation = self.corner_modes[k + 1]  # the mode in force for the move after the corner
+            if not blend and not exact_path:
+                continue
+            corner = self.corner(segments[k], segments[k + 1], self.chain[k][1], self.chain[k + 1][1], deviation,
+                                 straight_only=exact_path)
+            segments[k] = Segment(segments[k].start, segments[k].end, segments[k].length, segments[k].vmax,
+                                  segments[k].accel, segments[k].decel, corner)
         self.counts.extend(profile_chain(segments))
         self.chain = []
+        self.corner_modes = []
 
-    def corner(self, first: Segment, second: Segment, e1: tuple[float, ...], e2: tuple[float, ...]) -> int:
-        """The junction-deviation speed between two segments [quanta/slot]."""
+    def corner(self, first: Segment, second: Segment, e1: tuple[float, ...], e2: tuple[float, ...],
+               deviation: float, *, straight_only: bool = False) -> int:
+        """The junction-deviation speed between two segments [quanta/slot] (G61: straight on or rest)."""
         cos_theta = -sum(a * b for a, b in zip(e1, e2, strict=True))
         limit = min(first.vmax, second.vmax)
         if cos_theta < -0.999999:  # straight on
             return limit
-        if cos_theta > 0.999999:  # reversal
+        if cos_theta > 0.999999 or straight_only:  # reversal, or a corner under exact path
             return 0
         sin_half = math.sqrt(0.5 * (1 - cos_theta))
-        radius = self.deviation * sin_half / (1 - sin_half)
+        radius = deviation * sin_half / (1 - sin_half)
         return min(limit, math.floor(math.sqrt(min(first.accel, second.accel) * radius)))

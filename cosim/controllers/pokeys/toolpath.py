@@ -27,10 +27,13 @@ class Line:
 
 @dataclass(frozen=True)
 class Arc:
-    """A circular (helical) move in the XY plane from the current point to ``end`` around ``center``.
+    """A circular (helical) move from the current point to ``end`` around ``center``, in ``plane``.
 
-    ``center`` is (x, y) [units]; ``clockwise`` is G2. A full circle has ``end`` equal to the start
-    in x and y; z moves linearly with the angle (a helix). When the end radius differs from the
+    ``plane`` is ``"xy"`` (G17), ``"zx"`` (G18) or ``"yz"`` (G19); ``center`` is the centre's
+    coordinates on the plane's first and second axes (x, y for G17; z, x for G18; y, z for G19)
+    [units]; ``clockwise`` is G2, seen from the positive normal axis. A full circle has ``end``
+    equal to the start on the plane's axes; ``turns`` > 1 adds full turns (G2/G3 ``P``); the
+    normal axis moves linearly with the angle (a helix). When the end radius differs from the
     start radius (within the reader's tolerance) the radius changes linearly with the angle.
     """
 
@@ -39,6 +42,8 @@ class Arc:
     clockwise: bool
     feed: Fraction
     line: int
+    plane: str = "xy"
+    turns: int = 1
 
 
 @dataclass(frozen=True)
@@ -59,7 +64,45 @@ class Spindle:
     line: int
 
 
-Step = Line | Arc | Pause | Spindle
+@dataclass(frozen=True)
+class Output:
+    """An output of the host that changes between two moves: ``<engine>.<name>`` gets ``value``.
+
+    Names: ``coolant_flood``, ``coolant_mist`` (M7, M8, M9), ``tool`` (the tool in the spindle,
+    M6, M61), ``tool_changing`` (1 during a tool change), ``paused`` (1 during an M0/M1/M60
+    pause), ``dout<n>`` and ``aout<n>`` (M62-M65, M67, M68).
+    """
+
+    name: str
+    value: float
+    line: int
+
+
+@dataclass(frozen=True)
+class PathControl:
+    """How the moves from here on meet (G61, G61.1, G64 P): ``mode`` and ``tolerance`` [units].
+
+    ``mode`` is ``"exact_stop"`` (G61.1: every move ends at rest), ``"exact_path"`` (G61: a corner
+    that is not straight on is passed at rest) or ``"blend"`` (G64: corners at the junction-deviation
+    speed of ``tolerance``; ``None``: the machine file's ``path_tolerance``).
+    """
+
+    mode: str
+    tolerance: Fraction | None
+    line: int
+
+
+@dataclass(frozen=True)
+class Message:
+    """A ``(MSG, ...)``, ``(DEBUG, ...)`` or ``(PRINT, ...)`` text: the run's console shows it when the
+    host reaches it (the moves before it end there, as at any output)."""
+
+    kind: str
+    text: str
+    line: int
+
+
+Step = Line | Arc | Pause | Spindle | Output | PathControl | Message
 
 
 @dataclass(frozen=True)
@@ -70,7 +113,11 @@ class Toolpath:
     source: str = "program"
     start: Point = (Fraction(0), Fraction(0), Fraction(0))
     skipped: tuple[str, ...] = field(default=())
-    """Lines skipped under ``allow_unsupported`` (``file:line: word ... skipped``)."""
+    """Words skipped under ``allow_unsupported`` (``file:line:column: word ...; word skipped``)."""
+    notes: tuple[str, ...] = field(default=())
+    """What the program sets that is accepted and not modelled."""
+    ending: str = "M2"
+    """How the program ended: ``M2``, ``M30``, ``%``, or ``""`` (the file ended without any of them)."""
 
     @property
     def end(self) -> Point:

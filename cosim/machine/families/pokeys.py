@@ -20,10 +20,21 @@
     prefill = 64                  # slots queued before the start, and the level the host keeps
     units = "mm"                  # machine units of G-code programs: mm or inch
     feed_override = 1.0           # factor on the programmed feeds
-    path_mode = "exact_stop"      # or "blend": corners at the junction-deviation speed
-    path_tolerance = 0.05         # junction deviation for blend [units]
-    arc_tolerance = 0.01          # largest chord error of arcs [units]
-    allow_unsupported = false     # true: an unsupported word skips its line (listed) instead of an error
+    path_mode = "exact_stop"      # before any G61/G64: or "blend" (corners at the junction-deviation speed)
+    path_tolerance = 0.05         # junction deviation for blend, and for G64 without P [units]
+    arc_tolerance = 0.01          # largest chord error of arcs and splines [units]
+    allow_unsupported = false     # true: a word this machine cannot simulate is skipped (listed) instead
+    subroutine_path = ["subs"]    # folders of o<name> subroutine files (name.ngc), from the machine file
+    tool_change_time = "4 s"      # how long an M6 takes (the job waits)
+    tool_change_position = [0, 0, 50]  # machine coordinates the machine goes to for M6 (default: stays)
+    pause_time = "2 s"            # how long an M0/M60 (M1 with optional_stop) pause lasts
+    optional_stop = false         # M1 pauses
+    probe = false                 # the machine has a probe input (G38.n; the probe never trips)
+    block_delete = false          # lines starting with / are skipped
+    [[host.tool]]                 # the tool table (T, M6, G43, G41/G42, #5400..)
+    number = 1
+    diameter = 6.0                # [units]
+    z_offset = 25.4               # tool length offset [units]
 
     [[program]]                   # a G-code program (docs/pokeys.md, "G-code jobs") ...
     file = "pocket.nc"
@@ -43,13 +54,15 @@ from pathlib import Path
 from typing import Any
 
 from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
-from cosim.controllers.pokeys.gcode import UNITS, load_program
+from cosim.controllers.pokeys.gcode import UNITS, HostSetup, Tool, canonical, read_file, toolpath
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.job import JobWatch
 from cosim.controllers.pokeys.limits import AXIS_NAMES
 from cosim.controllers.pokeys.pathplan import MODES, HostAxis, PathSettings, PlannedJob, plan_toolpath
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
+from cosim.controllers.pokeys.states import EngineState
 from cosim.errors import ConfigurationError
+from cosim.job import Job, JobState
 from cosim.machine.document import Table
 from cosim.machine.families.pokeys_figures import declare_figures
 from cosim.scenario import Run
@@ -60,6 +73,10 @@ AXIS_KEYS = ("max_speed_hz", "accel", "decel", "limit_pos_enabled", "limit_neg_e
 HOST_AXIS_UNITS = {"steps_per_unit": "steps/unit", "max_velocity": "units/s", "max_accel": "units/s^2"}
 HOST_AXIS_KEYS = tuple(HOST_AXIS_UNITS)
 GCODE_AXES = ("x", "y", "z")
+GCODE_KEYS = ("units", "feed_override", "path_mode", "path_tolerance", "arc_tolerance", "allow_unsupported",
+              "subroutine_path", "tool_change_time", "tool_change_position", "pause_time", "optional_stop", "probe",
+              "block_delete", "tool")
+TOOL_KEYS = ("number", "diameter", "z_offset", "x_offset", "pocket")
 
 
 class PoKeysFamily:
@@ -126,27 +143,58 @@ class PoKeysFamily:
         link = host.text("link", "usb", choices=("usb", "ethernet"))
         prefill = host.integer("prefill", 64, low=1, high=controller.buffer.depth_slots)
         job: PlannedJob | None = None
+        ending = ""
+        part = "moves"
         if programs:
             if moves:
                 raise ConfigurationError(f"{document.file}: move: a machine runs either a G-code [[program]] or "
                                          "[[move]] tables, not both")
-            job = self._gcode_job(controller, programs, host, base=base)
+            job, ending, notes = self._gcode_job(controller, programs, host, base=base)
             counts = job.counts
-            run.sim.trace.meta["gcode"] = {"file": str(programs[0].data.get("file")), "notes": list(job.notes),
-                                           "skipped": list(job.skipped), "end_steps": list(job.end_steps)}
+            part = str(programs[0].data.get("file"))
+            run.sim.trace.meta["gcode"] = {"file": part, "notes": list(job.notes), "skipped": list(job.skipped),
+                                           "end_steps": list(job.end_steps), "not_modelled": notes, "end": ending}
             for note in [*job.notes, *(f"skipped: {line}" for line in job.skipped)]:
                 run.note(note)
+            for note in notes:
+                run.sim.notes.not_modelled(controller.name, "G-code", note.split(": ", 1)[-1],
+                                           where=note.split(": ", 1)[0] if ": " in note else part)
         else:
-            for key in ("units", "feed_override", "path_mode", "path_tolerance", "arc_tolerance",
-                        "allow_unsupported"):
+            for key in GCODE_KEYS:
                 if host.has(key):
                     raise ConfigurationError(f"{host.file}: {host.key(key)}: G-code settings need a G-code "
                                              "[[program]]")
             counts = self._move_job(controller, moves)
         with host.at():
             app = HostApp(run.sim, controller, to_entries(counts), link=link, prefill_slots=prefill)
-        watch = JobWatch(run.sim, controller, slots=len(counts), outputs=job.outputs if job else ())
+        controller.job = Job(run.sim, controller.name)  # type: ignore[attr-defined]
+        self._follow_job(run, controller, controller.job, part, ending if programs else "moves")  # type: ignore
+        watch = JobWatch(run.sim, controller, slots=len(counts), outputs=job.outputs if job else (),
+                         on_end=lambda: self._job_end(controller.job, part, ending if programs else "moves",  # type: ignore
+                                                      programs))
         declare_figures(run, controller, app, watch, counts, job)
+
+    @staticmethod
+    def _follow_job(run: Run, controller: PulseEngine, job: Job, part: str, ending: str) -> None:
+        """The job begins with the run; the engine's limit (100) and emergency (101) stops end it."""
+        job.begin(part)
+
+        def on_state(signal: Any) -> None:
+            if signal.value == EngineState.STOP_LIMIT:
+                job.stop(JobState.LIMIT, f"{controller.name}: stopped by a limit switch (engine state 100)")
+            elif signal.value == EngineState.STOP_EMERGENCY:
+                job.stop(JobState.EMERGENCY, f"{controller.name}: stopped by the emergency input (engine state 101)")
+
+        controller.state_signal.subscribe(on_state)
+
+    @staticmethod
+    def _job_end(job: Job, part: str, ending: str, programs: list[Table]) -> None:
+        """The buffer has drained after the job's last slot: done if the program reached its end."""
+        if ending or not programs:
+            job.finish(part)
+        else:
+            job.stop(JobState.ERROR, f"{part}: File ended with no percent sign or program end (LinuxCNC's error: "
+                                     "end the program with M2, M30 or a % line)")
 
     def _move_job(self, controller: PulseEngine, tables: list[Table]) -> list[tuple[int, ...]]:
         moves = []
@@ -158,7 +206,8 @@ class PoKeysFamily:
                 moves.append(Move(tuple(target) if isinstance(target, list) else target, speed_hz=speed, accel=accel))
         return plan(moves, controller.config.axes) if moves else []
 
-    def _gcode_job(self, controller: PulseEngine, programs: list[Table], host: Table, *, base: Path) -> PlannedJob:
+    def _gcode_job(self, controller: PulseEngine, programs: list[Table], host: Table, *,
+                   base: Path) -> tuple[PlannedJob, str, list[str]]:
         if len(programs) > 1:
             raise ConfigurationError(f"{programs[1].file}: {programs[1].path}: a PoKeys machine runs one G-code "
                                      "program (give one [[program]] table)")
@@ -182,10 +231,67 @@ class PoKeysFamily:
                                          f"{', '.join(GCODE_AXES)} axes)")
             with self.axes_table.at(name):
                 axes.append(HostAxis(**values, name=name))
+        with host.at():
+            setup = HostSetup(units=units, tool_change_time=_seconds(host, "tool_change_time"),
+                              tool_change_position=_position(host), pause_time=_seconds(host, "pause_time"),
+                              optional_stop=host.flag("optional_stop", False),
+                              arc_tolerance=host.number("arc_tolerance", Fraction(1, 100)))
+            tools = _tools(host)
+            search = [(base / str(p)).resolve() for p in _list(host, "subroutine_path")]
+            probe = host.flag("probe", False)
+            block_delete = host.flag("block_delete", False)
         with table.at("file"):
-            toolpath = load_program(path, units=units, allow_unsupported=allow)
-        return plan_toolpath(toolpath, axes, settings=settings, n_axes=len(controller.axis_names),
-                             max_pulses_per_slot=controller.device.max_pulses_per_slot)
+            program = canonical(read_file(path), units=units, tools=tools, search_path=search,
+                                allow_unsupported=allow, probe=probe, axes="xyz", block_delete=block_delete)
+            path_ = toolpath(program, setup)
+        job = plan_toolpath(path_, axes, settings=settings, n_axes=len(controller.axis_names),
+                            max_pulses_per_slot=controller.device.max_pulses_per_slot)
+        return job, path_.ending, list(path_.notes)
+
+
+def _seconds(host: Table, key: str) -> Fraction:
+    if not host.has(key):
+        return Fraction(0)
+    raw = host.raw(key)
+    with host.at(key):
+        ticks = _ns(raw, key) if isinstance(raw, str) else None
+    if ticks is not None:
+        return Fraction(ticks, 10**9)
+    with host.at(key):
+        return positive(host.number(key), key, unit="s")
+
+
+def _position(host: Table) -> tuple[Fraction, Fraction, Fraction] | None:
+    if not host.has("tool_change_position"):
+        return None
+    raw = host.raw("tool_change_position")
+    if not isinstance(raw, list) or len(raw) != 3 or not all(isinstance(v, int | float) for v in raw):
+        raise host.error("tool_change_position", raw, "[x, y, z] in machine units")
+    return (Fraction(raw[0]), Fraction(raw[1]), Fraction(raw[2]))
+
+
+def _list(host: Table, key: str) -> list[str]:
+    if not host.has(key):
+        return []
+    raw = host.raw(key)
+    items = [raw] if isinstance(raw, str) else raw
+    if not isinstance(items, list) or not all(isinstance(v, str) for v in items):
+        raise host.error(key, raw, "a folder or a list of folders (relative to the machine file)")
+    return items
+
+
+def _tools(host: Table) -> list[Tool]:
+    tools = []
+    for table in host.tables("tool"):
+        for key in table.data:
+            if key not in TOOL_KEYS:
+                raise table.error(key, key, ", ".join(TOOL_KEYS))
+        number = table.integer("number", low=1, high=99999)
+        with table.at():
+            tools.append(Tool(number, z_offset=table.number("z_offset", Fraction(0)),
+                              x_offset=table.number("x_offset", Fraction(0)),
+                              diameter=table.number("diameter", Fraction(0)), pocket=table.integer("pocket", 0)))
+    return tools
 
 
 def _engine_limits(host: dict[str, Fraction], given: dict[str, Any], model_max_hz: int) -> dict[str, Any]:

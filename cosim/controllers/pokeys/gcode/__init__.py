@@ -1,31 +1,82 @@
-"""G-code programs for the PoKeys host: the milling and engraving subset LinuxCNC users write.
+"""G-code programs for the PoKeys host, as LinuxCNC 2.9 interprets them.
 
-``read_program(text)`` and ``load_program(path)`` parse and check a program and interpret it into a
-:class:`~cosim.controllers.pokeys.toolpath.Toolpath` in machine units; the host planner
-(:func:`~cosim.controllers.pokeys.planner.plan_toolpath`) turns that into slots. The supported
-words are listed in :mod:`.reader`, the interpretation rules in :mod:`.interpreter`. Every error
-names the file and the line: ``pocket.nc:12: G5 is not supported (supported: G0, G1, ...)``.
+The front end is in layers, each a module with one job::
+
+    text ──syntax.py──> SourceLine (words, parameter settings, O-word; values unevaluated)
+         ──flow.py────> SourceFile (a file parsed whole, O-word labels indexed; subroutine files)
+         ──interpreter.py (+ ocode, words, params, execute, motion, cycles, compensation, messages)──> CanonProgram
+                        (canonical calls named and shaped like rs274's: STRAIGHT_FEED, ARC_FEED, ...)
+         ──program.py──> Toolpath (machine coordinates and units: moves, pauses, outputs, path control)
+         ──pathplan.plan_toolpath──> per-slot counts
+
+:func:`load_program` and :func:`read_program` run the whole chain to a
+:class:`~cosim.controllers.pokeys.toolpath.Toolpath`; :func:`canonical` stops at the canonical
+program. Every refusal is a :class:`~cosim.errors.ConfigurationError` naming ``file:line:column``
+and the construct: ``pocket.nc:12:4: G38.2 needs a probe input: add probe = true to [host] ...``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from fractions import Fraction
 from pathlib import Path
 
-from cosim.controllers.pokeys.gcode.interpreter import ARC_RADIUS_TOLERANCE_MM, MM_PER_INCH, UNITS, interpret
-from cosim.controllers.pokeys.gcode.reader import Block, Blocks, Word, read_file, read_text
+from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
+from cosim.controllers.pokeys.gcode.flow import ProgramError, SourceFile, parse_text, read_source
+from cosim.controllers.pokeys.gcode.interpreter import Interpreter
+from cosim.controllers.pokeys.gcode.program import HostSetup, toolpath
+from cosim.controllers.pokeys.gcode.state import MM_PER_INCH, Tool
 from cosim.controllers.pokeys.toolpath import Toolpath
+from cosim.errors import ConfigurationError
+
+UNITS = ("mm", "inch")
 
 
-def read_program(text: str, *, source: str = "program.nc", units: str = "mm",
-                 allow_unsupported: bool = False) -> Toolpath:
-    """The tool path of G-code ``text`` in machine ``units`` (``mm`` or ``inch``)."""
-    return interpret(read_text(text, source=source, allow_unsupported=allow_unsupported), units=units)
+def canonical(source: SourceFile, *, units: str = "mm", tools: Sequence[Tool] = (),
+              search_path: Sequence[str | Path] = (), allow_unsupported: bool = False, probe: bool = False,
+              axes: str = "xyzabc", block_delete: bool = False) -> CanonProgram:
+    """The canonical program of a parsed file on a machine in ``units`` (``ConfigurationError`` if refused)."""
+    if units not in UNITS:
+        raise ConfigurationError.out_of_range("units", units, ", ".join(UNITS))
+    interp = Interpreter(machine_units=units, tools=tools, search_path=search_path,
+                         allow_unsupported=allow_unsupported, probe=probe, axes=axes, block_delete=block_delete)
+    try:
+        return interp.run(source)
+    except ProgramError as exc:
+        raise ConfigurationError(str(exc)) from None
 
 
-def load_program(path: str | Path, *, units: str = "mm", allow_unsupported: bool = False) -> Toolpath:
-    """The tool path of the G-code file ``path`` (errors name ``path:line``)."""
-    return interpret(read_file(path, allow_unsupported=allow_unsupported), units=units)
+def read_text(text: str, *, source: str = "program.nc") -> SourceFile:
+    """Parse G-code ``text`` whole (``ConfigurationError`` at the first line that is not G-code)."""
+    try:
+        return parse_text(text, source)
+    except ProgramError as exc:
+        raise ConfigurationError(str(exc)) from None
 
 
-__all__ = ["ARC_RADIUS_TOLERANCE_MM", "MM_PER_INCH", "UNITS", "Block", "Blocks", "Toolpath", "Word", "interpret",
-           "load_program", "read_file", "read_program", "read_text"]
+def read_file(path: str | Path) -> SourceFile:
+    """Read and parse a G-code file."""
+    try:
+        return read_source(path)
+    except ProgramError as exc:
+        raise ConfigurationError(str(exc)) from None
+
+
+def read_program(text: str, *, source: str = "program.nc", units: str = "mm", allow_unsupported: bool = False,
+                 host: HostSetup | None = None, **options: object) -> Toolpath:
+    """The tool path of G-code ``text`` on a machine in ``units`` (``mm`` or ``inch``)."""
+    program = canonical(read_text(text, source=source), units=units, allow_unsupported=allow_unsupported,
+                        **options)  # type: ignore[arg-type]
+    return toolpath(program, host or HostSetup(units=units))
+
+
+def load_program(path: str | Path, *, units: str = "mm", allow_unsupported: bool = False,
+                 host: HostSetup | None = None, **options: object) -> Toolpath:
+    """The tool path of the G-code file ``path`` (errors name ``path:line:column``)."""
+    program = canonical(read_file(path), units=units, allow_unsupported=allow_unsupported,
+                        **options)  # type: ignore[arg-type]
+    return toolpath(program, host or HostSetup(units=units))
+
+
+__all__ = ["MM_PER_INCH", "UNITS", "Canon", "CanonProgram", "Fraction", "HostSetup", "Interpreter", "SourceFile",
+           "Tool", "Toolpath", "canonical", "load_program", "read_file", "read_program", "read_text", "toolpath"]

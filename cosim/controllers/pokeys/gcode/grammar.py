@@ -1,20 +1,71 @@
-"""The grammar of one G-code line (lark, LALR), as LinuxCNC's RS274/NGC reads the subset cosim runs.
+"""The grammar of one RS274/NGC line as LinuxCNC 2.9 reads it (lark, LALR), kept in Python so it ships.
 
-A line is a sequence of words (a letter and a number: ``G1``, ``X-2.5``, ``F1200``) and comments
-(``( ... )`` anywhere, ``;`` to the end of the line). Letters are case-insensitive; spaces and tabs
-between words and between a letter and its number are ignored. Parameters (``#1``), expressions
-(``[1+2]``), block delete (``/``) and O-words are outside the subset: they do not parse. Kept in
-Python so it ships with the package.
+LinuxCNC reads a line after taking out every space and tab outside comments and lowering the case
+of every letter outside comments (``G1 X 1 . 5`` is ``g1x1.5``); :mod:`.syntax` does the same and
+keeps a map back to the columns of the text as written. What is left is:
+
+* an optional block delete ``/`` and line number ``N``, at the start;
+* words: a letter (``@`` and ``^`` are the polar words) and a real value: a number, a parameter
+  (``#12``, ``#<name>``, ``#[1+2]``, ``##1``), an expression in brackets, a function
+  (``sin[30]``, ``atan[1]/[2]``, ``exists[#<x>]``) or a value with a sign (``x-#1``);
+* parameter settings ``#12=value``, ``#<name>=value``;
+* comments ``( ... )`` and ``; ...``;
+* an O-word: ``o100 sub``, ``o<name> call [1] [2]``, ``o1 if [#1 gt 0]``, ...
+
+Operators in expressions, highest precedence first: ``**``; ``*`` ``/`` ``mod``; ``+`` ``-``;
+``eq ne gt ge lt le``; ``and or xor``; all left-associative. A sign binds tighter than ``**``
+(``-2**2`` is 4).
 """
 
 GRAMMAR = r"""
-start: (word | COMMENT)*
+start: BLOCK_DELETE? line_number? _item*
 
-word: LETTER NUMBER
+line_number: "n" NUMBER
+_item: word | setting | COMMENT | oword
 
-LETTER: /[A-Za-z]/
-NUMBER: /[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)/
-COMMENT: /\([^()\n]*\)/ | /;[^\n]*/
+word: LETTER value
+setting: "#" index "=" value
 
-%ignore /[ \t\r\f]+/
+oword: "o" label OKEY oarg*
+label: NAME -> named_label
+     | value -> numbered_label
+oarg: "[" expr "]"
+
+?value: NUMBER -> number
+      | "-" value -> neg
+      | "+" value
+      | parameter
+      | "[" expr "]"
+      | FUNC "[" expr "]" -> func
+      | "atan" "[" expr "]" "/" "[" expr "]" -> atan
+      | "exists" "[" "#" NAME "]" -> exists
+
+parameter: "#" index
+index: NAME -> named
+     | value -> numbered
+
+?expr: expr LOGOP comparison -> binary
+     | comparison
+?comparison: comparison CMPOP sum -> binary
+           | sum
+?sum: sum addop product -> binary
+    | product
+?product: product mulop power -> binary
+        | power
+?power: power "**" value -> power
+      | value
+
+!addop: "+" | "-"
+!mulop: "*" | "/" | "mod"
+
+BLOCK_DELETE: "/"
+LETTER: /[a-mp-z@^$]/
+NUMBER: /[0-9]+\.?[0-9]*|\.[0-9]+/
+NAME: /<[^<>]*>/
+FUNC: "abs" | "acos" | "asin" | "cos" | "exp" | "fix" | "fup" | "round" | "ln" | "sin" | "sqrt" | "tan"
+LOGOP: "and" | "or" | "xor"
+CMPOP: "eq" | "ne" | "gt" | "ge" | "lt" | "le"
+OKEY: "sub" | "endsub" | "call" | "do" | "while" | "endwhile" | "if" | "elseif" | "else" | "endif"
+    | "repeat" | "endrepeat" | "break" | "continue" | "return"
+COMMENT: /\([^()]*\)/ | /;.*/
 """

@@ -1,221 +1,249 @@
-"""Interpreting checked G-code blocks into a tool path, as LinuxCNC's interpreter would.
+"""Running a G-code program into canonical calls, as LinuxCNC 2.9's interpreter does.
 
-The modal state starts as: no motion mode (axis words before the first ``G0``..``G3`` are an
-error), absolute distances (``G90``), the machine's own units, XY plane, no feed, spindle off at
-speed 0, no ``G92`` offset. Within a line the words act in RS274/NGC's order: ``F``, ``S``,
-``M3``/``M4``/``M5``, ``G4``, ``G17``, ``G20``/``G21``, ``G90``/``G91``, ``G92``, the motion,
-``M2``/``M30``. Coordinates and feeds are converted to machine units exactly (1 inch = 25.4 mm).
+:class:`Interpreter` runs the lines of a :class:`~.flow.SourceFile` with O-word control flow and
+subroutines (:mod:`.ocode`), evaluates each line's words (parameter settings take effect after the words are
+read, before the line runs), and executes them in RS274/NGC's order of execution (the
+:data:`ORDER` below), producing a :class:`~.canon.CanonProgram`. Motion is in :mod:`.motion`,
+canned cycles in :mod:`.cycles`, comments and messages in :mod:`.messages`.
 
-Errors (``FILE:LINE: reason``), before anything runs: a feed move (``G1``, ``G2``, ``G3``) with no
-feed rate yet or ``F0``; axis words with no motion mode; an arc whose end point is off its circle
-by more than :data:`ARC_RADIUS_TOLERANCE_MM` (:data:`ARC_RADIUS_TOLERANCE_INCH` in an inch
-program; IJ form), whose radius cannot reach its end point or that would be a full circle (R
-form), or with a zero radius; ``G4`` without ``P`` or with a negative ``P``; ``G92`` without axis
-words; two commands that both want the axis words.
+Refused before anything runs, with ``file:line:column`` and the construct by name: everything
+LinuxCNC refuses (with its reason), and what this machine cannot simulate: spindle-synchronised
+motion (``G33``, ``G33.1``, ``G76``), probing without a probe input (``G38.n``) and user M codes
+``M100``-``M199``. With ``allow_unsupported`` those words are skipped (their motion too) and listed.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from collections.abc import Sequence
 from fractions import Fraction
-from math import sqrt
+from pathlib import Path
+from typing import Any
 
-from cosim.controllers.pokeys.gcode.reader import Block, Blocks
-from cosim.controllers.pokeys.toolpath import Arc, Line, Pause, Point, Spindle, Step, Toolpath
-from cosim.errors import ConfigurationError
+from cosim.controllers.pokeys.gcode import compensation, execute, messages, ocode
+from cosim.controllers.pokeys.gcode.canon import Canon, CanonProgram
+from cosim.controllers.pokeys.gcode.flow import Library, ProgramError, SourceFile, Stop
+from cosim.controllers.pokeys.gcode.params import EvalError, Number, Parameters
+from cosim.controllers.pokeys.gcode.state import MM_PER_INCH, ZERO9, State, Tool
+from cosim.controllers.pokeys.gcode.syntax import SourceLine
+from cosim.controllers.pokeys.gcode.words import WordError, Words, check_uses, code_name, evaluate_line
 
-MM_PER_INCH = Fraction(254, 10)
-UNITS = ("mm", "inch")
-ARC_RADIUS_TOLERANCE_MM = Fraction(5, 1000)
-"""How far an arc's end may be off the circle through its start in a millimetre program [mm] (LinuxCNC's
-``TOLERANCE_MM``); the radius then changes linearly along the arc so that it ends exactly at its end point."""
-ARC_RADIUS_TOLERANCE_INCH = Fraction(5, 10000)
-"""The same in an inch program [in] (LinuxCNC's ``TOLERANCE_INCH``)."""
-AXES = "XYZ"
-SPINDLE_OFF = Spindle(False, False, Fraction(0), 0)
-
-
-@dataclass(frozen=True)
-class _State:
-    motion: int | None = None
-    incremental: bool = False
-    scale: Fraction = Fraction(1)  # program units -> machine units
-    feed: Fraction | None = None  # program units per minute
-    spindle: Spindle = SPINDLE_OFF
-    offset: Point = (Fraction(0), Fraction(0), Fraction(0))  # machine = program + offset
-    inch: bool = False  # the program's units are inches
-
-    @property
-    def tolerance(self) -> Fraction:
-        """The arc radius tolerance in machine units."""
-        return (ARC_RADIUS_TOLERANCE_INCH if self.inch else ARC_RADIUS_TOLERANCE_MM) * self.scale
+ORDER = ("comment", "feed mode G93-G95", "F", "S", "T", "M62-M68", "M6 M61", "M3 M4 M5 M19", "M70-M73",
+         "M7 M8 M9", "M48-M53", "M100-M199", "G4", "G17-G19", "G20 G21", "G40-G42", "G43 G49", "G54-G59.3",
+         "G61 G64", "G90 G91", "G98 G99", "G10 G28 G30 G52 G92", "motion", "M0 M1 M2 M30 M60")
+UNSUPPORTED_MOTION = {330: "G33 (spindle-synchronised motion) needs a spindle encoder: cosim models no spindle "
+                           "feedback",
+                      331: "G33.1 (rigid tapping) needs a spindle encoder: cosim models no spindle feedback",
+                      760: "G76 (threading) is spindle-synchronised: cosim models no spindle feedback"}
+PROBES = (382, 383, 384, 385)
 
 
-def interpret(blocks: Blocks, *, units: str = "mm") -> Toolpath:
-    """The tool path of ``blocks`` in machine ``units`` (``mm`` or ``inch``) from the machine origin."""
-    if units not in UNITS:
-        raise ConfigurationError.out_of_range("units", units, ", ".join(UNITS))
-    machine_mm = Fraction(1) if units == "mm" else MM_PER_INCH
-    state = _State(inch=units == "inch")
-    position: Point = (Fraction(0), Fraction(0), Fraction(0))
-    steps: list[Step] = []
-    for block in blocks.blocks:
-        where = f"{blocks.source}:{block.line}"
+class Interpreter:
+    """A LinuxCNC-like interpreter with its settings.
+
+    Parameters
+    ----------
+    machine_units : {'mm', 'inch'}
+        The units of stored parameters (offsets, G28/G30 positions) and of the tool table.
+    units : {'mm', 'inch'}, optional
+        Program units at the start (default: the machine's).
+    tools : sequence of Tool
+        The tool table.
+    search_path : sequence of path
+        Folders of subroutine files (``<name>.ngc``).
+    allow_unsupported : bool
+        Skip (and list) the words this machine cannot simulate instead of refusing the program.
+    probe : bool
+        The machine has a probe input (G38.n runs as a feed move that does not touch).
+    axes : str
+        The axis letters the machine has (lower case); a word for another axis is refused.
+    block_delete : bool
+        Lines starting with ``/`` are skipped.
+    max_lines : int
+        Lines run at most (an endless loop is refused).
+    """
+
+    def __init__(self, *, machine_units: str = "mm", units: str | None = None, tools: Sequence[Tool] = (),
+                 search_path: Sequence[str | Path] = (), allow_unsupported: bool = False, probe: bool = False,
+                 axes: str = "xyzabc", block_delete: bool = False, max_lines: int = 5_000_000,
+                 max_calls: int = 5_000_000) -> None:
+        self.machine_units = machine_units
+        self.tools = {t.number: t for t in tools}
+        self.library = Library(search_path)
+        self.allow_unsupported = allow_unsupported
+        self.probe = probe
+        self.axes = axes.upper()
+        self.block_delete = block_delete
+        self.max_lines = max_lines
+        self.max_calls = max_calls
+        self.state = State(units=units or machine_units)
+        self.params = Parameters(self._predefined)
+        self.params.numbered[5220] = 1
+        self.params.numbered[5599] = 1
+        self.program = CanonProgram("")
+        self.where = ""
+        self.line = 0
+        self.value: Number = 0
+        self.value_returned = 0
+        self.saved_states: list[State] = []
+        self.frames: list[ocode.Frame] = []
+        self.comp_queue = compensation.Queue()
+        self.canon_tlo: tuple[Number, ...] = ZERO9
+        self.canon_machine: tuple[Number, ...] = ZERO9  # where the last canonical move ended (machine coordinates)
+
+    # -- output ------------------------------------------------------------------------------------
+    def emit(self, name: str, *args: object) -> None:
+        """A canonical call now (held back with the compensated move if cutter compensation holds one)."""
+        if self.comp_queue and name in compensation.QUEUED:
+            compensation.enqueue(self, name, list(args))
+            return
+        self.emit_now(name, self.line, *args)
+
+    def emit_now(self, name: str, line: int, *args: object) -> None:
+        self.program.calls.append(Canon(name, args, self.frames[-1].file.path if self.frames else "", line))
+        if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE", "ARC_FEED"):
+            s = self.state
+            if name == "ARC_FEED":
+                first, second, normal = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}.get(s.plane, (0, 1, 2))
+                point: list[Any] = [0] * 9
+                point[first], point[second], point[normal] = args[0], args[1], args[5]
+                point[3:] = args[6:]
+            else:
+                point = list(args[:9])
+            self.canon_tlo = s.tlo
+            self.canon_machine = tuple(p + o + a + t for p, o, a, t in zip(point, s.origin, s.axis_offset, s.tlo,
+                                                                           strict=True))
+        if len(self.program.calls) > self.max_calls:
+            raise ProgramError(self.where, f"the program makes more than {self.max_calls} canonical calls "
+                                           "(an endless loop?)")
+
+    def note(self, text: str) -> None:
+        if text not in self.program.notes:
+            self.program.notes.append(text)
+
+    def skip(self, what: str, column: int) -> None:
+        self.program.skipped.append(f"{self.where}:{column}: {what}; word skipped")
+
+    # -- units ---------------------------------------------------------------------------------------
+    def machine_to_program(self, value: Number) -> Number:
+        """A length in machine units (stored parameters, tool table) in program units."""
+        if self.machine_units == self.state.units:
+            return value
+        return value * MM_PER_INCH if self.machine_units == "inch" else value / MM_PER_INCH
+
+    def program_to_machine(self, value: Number) -> Number:
+        if self.machine_units == self.state.units:
+            return value
+        return value / MM_PER_INCH if self.machine_units == "inch" else value * MM_PER_INCH
+
+    # -- running -----------------------------------------------------------------------------------
+    def run(self, main: SourceFile) -> CanonProgram:
+        """Run ``main`` to its end; the canonical program (raises ``ProgramError``)."""
+        self.program = CanonProgram(main.path)
+        self.frames = [ocode.Frame(main, main.start)]
+        executed = 0
         try:
-            state, position, end = _block(block, state, position, steps, machine_mm)
-        except _Refused as exc:
-            raise ConfigurationError(f"{where}: {exc.args[0]}") from None
-        if end:
-            break
-    return Toolpath(tuple(steps), source=blocks.source, skipped=blocks.skipped)
+            while True:
+                frame = self.frames[-1]
+                source = frame.file
+                end = source.stop if source.stop is not None else len(source.lines)
+                if frame.pc >= end:
+                    compensation.dequeue(self)
+                    if len(self.frames) > 1:
+                        raise ProgramError(source.where(frame.pc - 1), f"the file ended inside subroutine "
+                                           f"{ocode.label_text(frame.label)} (no endsub)")
+                    if source.stop is not None:
+                        self.where, self.line = source.where(source.stop), source.stop + 1
+                        self.program.end, self.program.end_where = "%", self.where
+                    return self.program
+                line = source.lines[frame.pc]
+                self.line = line.number
+                self.where = source.where(frame.pc)
+                frame.pc += 1
+                executed += 1
+                if executed > self.max_lines:
+                    raise ProgramError(self.where, f"the program runs more than {self.max_lines} lines (an endless "
+                                                   "loop?)")
+                if line.block_delete and self.block_delete:
+                    continue
+                try:
+                    if line.oword is not None:
+                        ocode.oword(self, line, frame)
+                    elif not line.empty or line.comments:
+                        self._line(line)
+                except (WordError, EvalError) as exc:
+                    column = getattr(exc, "column", 0) or 0
+                    raise ProgramError(f"{self.where}:{column}" if column else self.where, str(exc)) from None
+        except Stop:
+            return self.program
+
+    # -- O-words -----------------------------------------------------------------------------------
+    def _line(self, line: SourceLine) -> None:
+        state = self.state
+        words = evaluate_line(line, self.params)
+        values = []
+        for setting in line.settings:
+            try:
+                index = setting.index if isinstance(setting.index, str) else self.params.evaluate(setting.index)
+                values.append((index, self.params.evaluate(setting.expr)))
+            except EvalError as exc:
+                raise ProgramError(self.where, f"parameter setting: {exc}") from None
+        for index, value in values:
+            try:
+                self.params.write(index, float(value) if isinstance(value, Fraction) else value)
+            except EvalError as exc:
+                raise ProgramError(self.where, str(exc)) from None
+        self._refuse_unsupported(words)
+        check_uses(words, state.motion)
+        for letter in words.values:
+            if letter in "XYZABCUVW" and letter not in self.axes:
+                raise WordError(f"Bad character '{letter.lower()}' used: the machine has no {letter} axis (its "
+                                f"axes: {', '.join(self.axes)})", words.column(letter))
+        if line.comments:
+            messages.comment(self, line.comments[-1])
+        if not words.g and not words.m and not words.values:
+            return
+        self._execute(words)
+
+    def _refuse_unsupported(self, words: Words) -> None:
+        motion_code = words.g.get(1)
+        reason = None
+        if motion_code in UNSUPPORTED_MOTION:
+            reason = UNSUPPORTED_MOTION[motion_code]
+        elif motion_code in PROBES and not self.probe:
+            reason = (f"{code_name('G', motion_code)} needs a probe input: add probe = true to [host] in the machine "
+                      "file (the probe trips at the end of the move)")
+        if reason is not None and motion_code is not None:
+            column = words.g_columns[1]
+            if not self.allow_unsupported:
+                raise WordError(reason, column)
+            self.skip(f"{code_name('G', motion_code)} and its axis words: {reason}", column)
+            del words.g[1]
+            for letter in ("X", "Y", "Z", "A", "B", "C", "U", "V", "W", "I", "J", "K", "P", "Q", "L", "R", "E", "H"):
+                words.values.pop(letter, None)
+        user = words.m.get(10)
+        if user is not None:
+            reason = (f"M{user} is a user M code (a program M{user} that LinuxCNC runs from its configuration): "
+                      "cosim cannot run it")
+            if not self.allow_unsupported:
+                raise WordError(reason, words.m_columns[10])
+            self.skip(f"M{user}: {reason}", words.m_columns[10])
+            del words.m[10]
+            words.values.pop("P", None)
+            words.values.pop("Q", None)
+
+    def _execute(self, words: Words) -> None:
+        execute.block(self, words)
+        if words.m.get(6) == 6:
+            # after a tool change LinuxCNC's interpreter re-reads its position from the end of the last move,
+            # in the offsets in force now but with the tool offset of that move (a G43 on the M6 line does
+            # not shift it; rs274 prints it so)
+            s = self.state
+            s.position = tuple(m - o - a - t for m, o, a, t in zip(self.canon_machine, s.origin, s.axis_offset,
+                                                                   self.canon_tlo, strict=True))
+
+    # -- predefined parameters ---------------------------------------------------------------------
+    def _predefined(self, name: str) -> Number | None:
+        return messages.predefined(self, name)
 
 
-class _Refused(Exception):
-    """A block's error, without its place (added by :func:`interpret`)."""
-
-
-def _block(block: Block, state: _State, position: Point, steps: list[Step],
-           machine_mm: Fraction) -> tuple[_State, Point, bool]:
-    g = [int(v) for v in block.codes("G")]
-    m = [int(v) for v in block.codes("M")]
-    axis_words = {a: v for a in AXES if (v := block.get(a)) is not None}
-    feed = block.get("F")
-    if feed is not None:
-        if feed < 0:
-            raise _Refused(f"F{_num(feed)}: a feed rate is >= 0")
-        state = replace(state, feed=feed)
-    speed = block.get("S")
-    spindle = state.spindle
-    if speed is not None:
-        if speed < 0:
-            raise _Refused(f"S{_num(speed)}: a spindle speed is >= 0")
-        spindle = replace(spindle, speed=speed)
-    for code in m:
-        if code in (3, 4):
-            spindle = replace(spindle, on=True, ccw=code == 4)
-        elif code == 5:
-            spindle = replace(spindle, on=False, ccw=False)
-    if (spindle.on, spindle.ccw, spindle.speed) != (state.spindle.on, state.spindle.ccw, state.spindle.speed):
-        spindle = replace(spindle, line=block.line)
-        steps.append(spindle)
-        state = replace(state, spindle=spindle)
-    if 4 in g:
-        seconds = block.get("P")
-        if seconds is None or seconds < 0:
-            raise _Refused("G4 needs P, the dwell time in seconds (>= 0)" if seconds is None
-                           else f"G4 P{_num(seconds)}: the dwell time is >= 0 s")
-        if axis_words:
-            raise _Refused("G4 with axis words: a dwell does not move")
-        steps.append(Pause(seconds, block.line))
-    elif block.get("P") is not None:
-        raise _Refused("P without G4: P is the dwell time of G4")
-    for code in g:
-        if code in (20, 21):
-            program_mm = MM_PER_INCH if code == 20 else Fraction(1)
-            state = replace(state, scale=program_mm / machine_mm, inch=code == 20)
-        elif code in (90, 91):
-            state = replace(state, incremental=code == 91)
-        elif code in (0, 1, 2, 3):
-            state = replace(state, motion=code)
-    if 92 in g:
-        if not axis_words:
-            raise _Refused("G92 needs axis words: the coordinates the current point gets (e.g. G92 X0 Y0)")
-        if any(c in g for c in (0, 1, 2, 3)):
-            raise _Refused("G92 and a motion on one line: both would use the axis words")
-        offset = list(state.offset)
-        for i, a in enumerate(AXES):
-            if a in axis_words:
-                offset[i] = position[i] - axis_words[a] * state.scale
-        return replace(state, offset=(offset[0], offset[1], offset[2])), position, _ends(m)
-    arc_words = any(block.get(letter) is not None for letter in "IJR")
-    if axis_words or (arc_words and state.motion in (2, 3)):
-        position = _motion(block, state, position, axis_words, steps)
-    elif arc_words:
-        raise _Refused("I, J or R without an arc: they belong to G2 or G3")
-    return state, position, _ends(m)
-
-
-def _ends(m: list[int]) -> bool:
-    return 2 in m or 30 in m
-
-
-def _motion(block: Block, state: _State, position: Point, words: dict[str, Fraction],
-            steps: list[Step]) -> Point:
-    if state.motion is None:
-        raise _Refused("axis words with no motion mode: give G0, G1, G2 or G3 first")
-    target = list(position)
-    for i, a in enumerate(AXES):
-        value = words.get(a)
-        if value is None:
-            continue
-        target[i] = position[i] + value * state.scale if state.incremental else value * state.scale + state.offset[i]
-    end: Point = (target[0], target[1], target[2])
-    if state.motion == 0:
-        steps.append(Line(end, None, block.line))
-        return end
-    feed = _feed(state, block)
-    if state.motion == 1:
-        if block.get("R") is not None or block.get("I") is not None or block.get("J") is not None:
-            raise _Refused("I, J or R on a straight move (G1): arcs are G2 and G3")
-        steps.append(Line(end, feed, block.line))
-        return end
-    steps.append(_arc(block, state, position, end, feed))
-    return end
-
-
-def _feed(state: _State, block: Block) -> Fraction:
-    code = f"G{state.motion}"
-    if state.feed is None:
-        raise _Refused(f"{code} with no feed rate: give F (units per minute) on or before the first feed move")
-    if state.feed == 0:
-        raise _Refused(f"{code} with feed rate F0: a feed move needs F > 0")
-    return state.feed * state.scale / 60
-
-
-def _arc(block: Block, state: _State, start: Point, end: Point, feed: Fraction) -> Arc:
-    code = f"G{state.motion}"
-    clockwise = state.motion == 2
-    radius = block.get("R")
-    i, j = block.get("I"), block.get("J")
-    tolerance = float(state.tolerance)
-    if radius is not None and (i is not None or j is not None):
-        raise _Refused(f"{code} with both R and I/J: give the centre one way")
-    if radius is None and i is None and j is None:
-        raise _Refused(f"{code} needs I and J (centre offsets) or R (radius)")
-    if radius is None:
-        center = (start[0] + (i or 0) * state.scale, start[1] + (j or 0) * state.scale)
-        r_start = _dist(start, center)
-        r_end = _dist(end, center)
-        if r_start == 0:
-            raise _Refused(f"{code} with a zero radius: I and J put the centre on the start point")
-        if abs(r_end - r_start) > tolerance:
-            raise _Refused(f"{code}: the end point is not on the arc: radius to the start {r_start:.6g}, to the end "
-                           f"{r_end:.6g} (they differ by {abs(r_end - r_start):.4g}; allowed: {tolerance:g} machine "
-                           f"units); centre X{float(center[0]):g} Y{float(center[1]):g}")
-        return Arc(end, center, clockwise, feed, block.line)
-    r = float(radius * state.scale)
-    dx, dy = float(end[0] - start[0]), float(end[1] - start[1])
-    chord = sqrt(dx * dx + dy * dy)
-    if chord == 0:
-        raise _Refused(f"{code} R{_num(radius)} with the end point on the start point: an R arc cannot be a full "
-                       "circle (give I and J)")
-    if r == 0:
-        raise _Refused(f"{code} R0: the radius is not 0")
-    half = chord / 2
-    if half > abs(r) + tolerance:
-        raise _Refused(f"{code} R{_num(radius)}: the radius is too small to reach the end point (the end is "
-                       f"{chord:.6g} away: R must be at least {half:.6g})")
-    h = sqrt(max(0.0, r * r - half * half))
-    # centre to the right of the chord for G2 with R > 0 (an arc of at most half a turn), left for G3
-    side = (1 if clockwise else -1) * (1 if r > 0 else -1)
-    cx = float(start[0]) + dx / 2 + side * h * dy / chord
-    cy = float(start[1]) + dy / 2 - side * h * dx / chord
-    return Arc(end, (Fraction(cx), Fraction(cy)), clockwise, feed, block.line)
-
-
-def _dist(point: Point, center: tuple[Fraction, Fraction]) -> float:
-    return sqrt(float((point[0] - center[0]) ** 2 + (point[1] - center[1]) ** 2))
-
-
-def _num(value: Fraction) -> str:
-    return str(value.numerator) if value.denominator == 1 else f"{float(value):g}"
+__all__ = ["ORDER", "ZERO9", "Interpreter", "ProgramError", "Stop", "Tool"]

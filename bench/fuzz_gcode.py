@@ -1,0 +1,85 @@
+"""Long fuzz run of the G-code reader (syntax, interpreter, tool path): count inputs and crashes.
+
+The inputs come from ``tests/gcode_fuzz_programs.draw``: 70 % are one to three lines (words of every modal
+group, parameters, expressions, O-words, comments, odd numbers; some mutated), 15 % whole generated
+programs, 10 % mutations of those or of the bundled programs (characters inserted, deleted or replaced,
+every kind of line end, lines swapped), 5 % random text. Each input is parsed, interpreted (an endless
+loop is refused after 20,000 lines) and turned into a tool path. A crash is any exception that is not
+one of the project's own errors (:class:`cosim.errors.CosimError`); the first ones are written to
+``--crashes`` with their traceback. An input that takes more than ``SLOW_S`` of wall time is counted as
+slow and written there too.
+
+Run (``--workers`` processes, each with its own seed, ``--inputs`` in all or for ``--minutes``)::
+
+    .venv/bin/python bench/fuzz_gcode.py --inputs 1000000 --workers 2
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import random
+import sys
+import time
+import traceback
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+from gcode_fuzz_programs import draw, exercise, seeds
+
+#: Wall time above which an input counts as slow [s].
+SLOW_S = 5.0
+
+
+def worker(seed: int, seconds: float, crash_dir: str, limit: int) -> tuple[int, int, int, float, int]:
+    """Fuzz for ``seconds`` or ``limit`` inputs; returns (inputs, run to a tool path, crashes, slowest [s], slow)."""
+    rng = random.Random(seed)
+    texts = seeds()
+    inputs = parsed = crashes = slow = 0
+    slowest = 0.0
+    end = time.monotonic() + seconds
+    while time.monotonic() < end and inputs < limit:
+        text = draw(rng, texts)
+        started = time.monotonic()
+        try:
+            parsed += exercise(text)
+        except Exception:
+            crashes += 1
+            if crashes <= 20:
+                Path(crash_dir).mkdir(parents=True, exist_ok=True)  # only when there is something to keep
+                path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"
+                path.write_text(f"{text!r}\n\n{traceback.format_exc()}")
+        took = time.monotonic() - started
+        if took > SLOW_S:
+            slow += 1
+            if slow <= 20:
+                Path(crash_dir).mkdir(parents=True, exist_ok=True)
+                (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
+        slowest = max(slowest, took)
+        inputs += 1
+    return inputs, parsed, crashes, slowest, slow
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=600.0)
+    parser.add_argument("--inputs", type=int, default=1_000_000, help="inputs in all (split over the workers)")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--crashes", default="fuzz_crashes")
+    args = parser.parse_args()
+    seconds = args.minutes * 60
+    started = time.monotonic()
+    with multiprocessing.Pool(args.workers) as pool:
+        share = -(-args.inputs // args.workers)
+        results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes, share) for k in range(args.workers)])
+    inputs = sum(r[0] for r in results)
+    print(f"{inputs} inputs ({sum(r[1] for r in results)} ran to a tool path), {sum(r[2] for r in results)} crashes, "
+          f"slowest input {max(r[3] for r in results):.2f} s, {sum(r[4] for r in results)} slower than {SLOW_S:g} s, "
+          f"{time.monotonic() - started:.0f} s wall, "
+          f"{args.workers} workers")
+
+
+if __name__ == "__main__":
+    main()
