@@ -198,7 +198,7 @@ def test_hazard_runs_have_their_verdicts_per_check_and_only_a_missed_hazard_is_a
 
 MACHINE = """
 [machine]
-until = "20 ms"
+until = "40 ms"  # 100 steps at 5 kHz take 20 ms and the job must finish
 
 [controller]
 family = "pokeys"
