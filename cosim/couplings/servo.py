@@ -25,7 +25,6 @@ from collections.abc import Mapping
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from cosim.controllers.pmac.motor import Motor
@@ -75,8 +74,10 @@ def connect_servo(motor: Motor, plant: PlantLike, *, fraction_bits: int = 5,
     encoder = PlantEncoder(plant, variables={role: names[role] for role in ENCODER_ROLES})
     plant.drive(required(names, "command"), motor.dac, convert=dac_volts)
 
+    extended, sim, scale = encoder.extended, encoder.sim, 1 << fraction_bits
+
     def feedback() -> float:
-        return float(encoder.position(fraction_bits=fraction_bits))
+        return extended(sim.now, fraction_bits) / scale  # = float(encoder.position(...)): exact
 
     motor.feedback = feedback
     return encoder
@@ -110,6 +111,8 @@ def full_model_margins(design: PidDesign, params: ServoParameters, *,
     inductance) in counts per DAC bit, sampled with a zero-order hold at the servo period and
     closed with the designed discrete controller.
     """
+    import control  # python-control only where a loop is checked (see cosim.controllers.pmac.servo)
+
     scale = params.counts_per_rev / (2 * math.pi) * float(volts_per_bit)
     plant_d = control.sample_system(linear_model(params, output="angle") * scale, design.period_s, method="zoh")
     controller = control.ss(np.array(design.a), np.array(design.b).reshape(-1, 1),

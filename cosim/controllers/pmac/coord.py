@@ -61,7 +61,7 @@ class TimeBaseSource(Protocol):
         ...
 
     @property
-    def units_per_count(self) -> Fraction | None:
+    def units_per_count(self) -> int | None:
         """Time-base units per master count (None for a software register: not external)."""
         ...
 
@@ -76,7 +76,7 @@ class PercentRegister:
         Servo interrupt time; ``%100`` writes I10.
     """
 
-    units_per_count: Fraction | None = None
+    units_per_count: int | None = None
 
     def __init__(self, address: int, i10: int) -> None:
         self.address = address
@@ -178,6 +178,8 @@ class CoordinateSystem:
         self._end: dict[str, Fraction] = {}
         self._ideal_end: dict[str, Fraction] = {}
         self._started = False
+        self._last: list[int | bool | None] = [None, None, None, None]  # actual, source, limited, slip as recorded
+        self._dwell_noted = False
         p = f"{device}.cs{number}"
         self._tb = Signal(sim, f"{p}.timebase", kind="int", unit="2^-23 ms", description="actual time-base value")
         self._pct = Signal(sim, f"{p}.timebase_pct", kind="real", unit="%", description="actual time base in %")
@@ -287,6 +289,14 @@ class CoordinateSystem:
         """Master-derived (slip-free) position of ``axis`` [axis units]."""
         return self._ideal.position(axis) if self._ideal is not None else self.axes[axis]
 
+    def position_ratio(self, axis: str, *, ideal: bool = False) -> tuple[int, int]:
+        """:meth:`position` (or :meth:`ideal_position`) as ``(numerator, denominator)`` integers."""
+        runner = self._ideal if ideal else self._runner
+        if runner is not None:
+            return runner.position_ratio(axis)
+        value = self.axes[axis]
+        return value.numerator, value.denominator
+
     @property
     def slip_counts(self) -> Fraction | None:
         """Accumulated slip [master counts] (None if the source is not external)."""
@@ -300,40 +310,57 @@ class CoordinateSystem:
 
     # -- servo cycle ------------------------------------------------------------------------
     def update(self, cycle: int, t: int) -> None:
-        """One servo cycle: read the source, apply Ix94, advance the program."""
+        """One servo cycle: read the source, apply Ix94, advance the program (integers only)."""
         source = self.source.read()
         self.source_value = source
         if not self._started:
             self.actual = source
             self._started = True
+        actual = self.actual
         hold = self.holding or self.releasing
         target = 0 if self.holding else source
         rate = self.ix95 if hold else self.ix94
-        diff = target - self.actual
-        step = max(-rate, min(rate, diff))
-        self.actual += step
+        diff = target - actual
+        step = -rate if diff < -rate else (rate if diff > rate else diff)
+        actual += step
+        self.actual = actual
         limited = step != diff
-        external = self.external
+        upc = self.source.units_per_count
+        external = upc is not None
         if hold:
             if external:
-                self.slip_units += source - self.actual
+                self.slip_units += source - actual
             if self.releasing and not limited:
                 self.releasing = False
             limited = False
         elif limited:
             if external:
-                self.slip_units += source - self.actual
+                self.slip_units += source - actual
                 if not any("Ix94" in n for _, n in self.notes):
                     self.notes.append((t, f"Ix94 limit acted under external time base at cycle {cycle}: "
                                              "position synchronization to the master is lost"))
-            self.limit_events.append(LimitEvent(cycle, t, source, self.actual, self.slip_counts))
-        self._advance_program(source if external else self.actual, t)
-        self._tb.set(self.actual)
-        self._pct.set(float(self.percent))
-        self._src.set(source)
-        slip = self.slip_counts
-        self._slip.set(int(slip) if slip is not None else 0)
-        self._active.set(limited)
+            self.limit_events.append(LimitEvent(cycle, t, source, actual, self.slip_counts))
+        if self._runner is not None or self._pending is not None:
+            self._advance_program(source if external else actual, t)
+        last = self._last
+        if actual != last[0]:
+            last[0] = actual
+            self._tb.set(actual)
+            self._pct.set(100 * actual / self.i10)  # = float(percent(actual, I10)), correctly rounded
+        if source != last[1]:
+            last[1] = source
+            self._src.set(source)
+        slip = 0
+        if external and self.slip_units:
+            slip = abs(self.slip_units) // upc  # truncated toward zero, as int(slip_counts)
+            if self.slip_units < 0:
+                slip = -slip
+        if slip != last[3]:
+            last[3] = slip
+            self._slip.set(slip)
+        if limited != last[2]:
+            last[2] = limited
+            self._active.set(limited)
 
     def _start_pending(self) -> None:
         pending, self._pending = self._pending, None
@@ -359,7 +386,8 @@ class CoordinateSystem:
         feeder = self._feeder
         if feeder is not None:
             feeder.calculate(self, t)
-        if self._runner.in_dwell and self.external and not any("DWELL" in n for _, n in self.notes):
+        if not self._dwell_noted and self._runner.in_dwell and self.external:
+            self._dwell_noted = True
             self.notes.append((t, "DWELL under external time base: it runs in real time, so "
                                      "synchronism with the master is lost"))
         self._runner.advance(self.actual, self.i10)

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from fractions import Fraction
 
 from cosim import validate
 from cosim.controllers.pmac.encoder import ONE_OVER_T_BITS, TRIGGERED_BITS, EncoderChannel
@@ -171,7 +170,7 @@ class DifferentiatingEntry(Entry):
         return True
 
     @property
-    def units_per_count(self) -> Fraction:
+    def units_per_count(self) -> int:
         """Time-base units (2^-23 ms) per master count moved in one servo cycle."""
         raise NotImplementedError
 
@@ -213,9 +212,9 @@ class TimeBaseEntry(DifferentiatingEntry):
         self.position = 0
 
     @property
-    def units_per_count(self) -> Fraction:
+    def units_per_count(self) -> int:
         bits = self._source.position_bits if self._source is not None else ONE_OVER_T_BITS
-        return Fraction(2 * self.scale_factor << (bits or 0))
+        return 2 * self.scale_factor << (bits or 0)
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
         source = table.entry_at(self.source_address)
@@ -319,8 +318,8 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
         return TRIGGERED_METHODS[self.method]
 
     @property
-    def units_per_count(self) -> Fraction:
-        return Fraction(2 * self.scale_factor << TRIGGERED_BITS)
+    def units_per_count(self) -> int:
+        return 2 * self.scale_factor << TRIGGERED_BITS
 
     def set_method(self, method: int, *, t: int = 0) -> None:
         """Change the method digit (a write of the first line: ``I8010=$B78008``)."""

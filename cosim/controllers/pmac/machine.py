@@ -60,7 +60,7 @@ class EntrySource:
         return self.entry.result
 
     @property
-    def units_per_count(self) -> Fraction:
+    def units_per_count(self) -> int:
         return self.entry.units_per_count
 
 

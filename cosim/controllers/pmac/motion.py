@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from cosim import validate
+from cosim.controllers.pmac.pieces import IntegerPieces, Piece, scale
 from cosim.controllers.pmac.profile import Profile
 from cosim.controllers.pmac.units import UNITS_PER_MS
 from cosim.errors import ConfigurationError
@@ -158,12 +159,20 @@ class AxisPath:
     profile: Profile
 
     def position(self, tau_ms: Fraction) -> Fraction:
-        """Position at ``tau_ms`` into the segment [axis units]."""
+        """Position at ``tau_ms`` into the segment [axis units] (exact; the reference for :meth:`pieces`)."""
         if self.profile.distance == 0:
             return self.target if tau_ms >= self.profile.total_ms else self.start
         if tau_ms >= self.profile.total_ms:
             return self.target
         return self.start + (self.target - self.start) * self.profile.travelled(tau_ms) / self.profile.distance
+
+    def pieces(self) -> list[Piece]:
+        """:meth:`position` as polynomial pieces in ``tau`` [ms] (see :mod:`.pieces`)."""
+        profile = self.profile
+        if profile.distance == 0:
+            return [Piece(profile.total_ms, False, (self.start,)), Piece(None, False, (self.target,))]
+        factor = (self.target - self.start) / profile.distance
+        return [Piece(p.bound, p.closed, scale(p.poly, factor, self.start)) for p in profile.pieces()]
 
 
 @dataclass(frozen=True)
@@ -183,6 +192,7 @@ class Segment:
     real_time: bool
     duration_units: Fraction
     paths: tuple[AxisPath, ...] = ()
+    _integer: dict[tuple[str, int], IntegerPieces] = field(default_factory=dict, compare=False, repr=False)
 
     @property
     def axis(self) -> str | None:
@@ -215,6 +225,17 @@ class Segment:
             if axis is None or path.axis == axis:
                 return path.position(tau_ms)
         raise ConfigurationError.out_of_range("axis of Segment.position", axis, ", ".join(p.axis for p in self.paths))
+
+    def integer_pieces(self, axis: str, scale_units: int) -> IntegerPieces | None:
+        """``axis``'s position for elapsed times of ``m / scale_units`` time-base units (None: not moving here)."""
+        key = (axis, scale_units)
+        found = self._integer.get(key)
+        if found is None:
+            path = next((p for p in self.paths if p.axis == axis), None)
+            if path is None:
+                return None
+            found = self._integer[key] = IntegerPieces(path.pieces(), scale_units * UNITS_PER_MS)
+        return found
 
 
 def path_length(deltas: Iterable[Fraction]) -> Fraction:
@@ -268,13 +289,18 @@ def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> l
     return [compile_item(item, current) for item in items]
 
 
-@dataclass
 class ProgramRunner:
-    """Runs compiled segments, advanced once per servo cycle.
+    """Runs compiled segments, advanced once per servo cycle, in integers.
 
     Segments may be appended while it runs (a motion program calculates ahead): the list is
     shared with a second runner advanced by another clock (the coordinate system's ideal,
     master-derived one). A segment that ends with nothing queued after it loses its overrun.
+
+    The time into the current segment is ``m / scale`` time-base units (2^-23 ms) with integers
+    ``m`` and ``scale``: ``scale`` is 1 unless time carried over from the segment before has a
+    denominator (a move whose length is not a whole number of units), and each cycle adds
+    ``value * scale`` to ``m``. Positions are read as exact ratios of integers
+    (:meth:`position_ratio`, from :meth:`Segment.integer_pieces`).
 
     Parameters
     ----------
@@ -284,19 +310,24 @@ class ProgramRunner:
         Starting position of every axis of the coordinate system [axis units].
     """
 
-    segments: list[Segment]
-    positions: Mapping[str, Fraction]
-    index: int = 0
-    local_units: Fraction = Fraction(0)
-    _held: dict[str, Fraction] = field(init=False)
-
-    def __post_init__(self) -> None:
-        self._held = dict(self.positions)
+    def __init__(self, segments: list[Segment], positions: Mapping[str, Fraction]) -> None:
+        self.segments = segments
+        self.positions = positions
+        self.index = 0
+        self._m = 0
+        self._scale = 1
+        self._limit: int | None = None  # ceil(duration * scale) of the current segment, once known
+        self._held = dict(positions)
 
     @classmethod
     def of(cls, items: Iterable[Item], positions: Mapping[str, Fraction]) -> ProgramRunner:
         """A runner over ``items`` compiled from ``positions``."""
         return cls(compile_items(items, positions), positions)
+
+    @property
+    def local_units(self) -> Fraction:
+        """Time into the current segment [2^-23 ms] (exact)."""
+        return Fraction(self._m, self._scale)
 
     @property
     def done(self) -> bool:
@@ -306,7 +337,7 @@ class ProgramRunner:
     @property
     def in_dwell(self) -> bool:
         """True while the current segment is a DWELL."""
-        return not self.done and self.segments[self.index].real_time
+        return self.index < len(self.segments) and self.segments[self.index].real_time
 
     def queued_ahead(self) -> int:
         """Segments not finished yet (the current one included) that take time or wait in real time."""
@@ -314,27 +345,50 @@ class ProgramRunner:
 
     def advance(self, timebase_units: int, real_units: int) -> None:
         """Advance by one servo cycle: ``timebase_units`` (time base) or ``real_units`` (I10) in a dwell."""
-        if self.done:
+        segments = self.segments
+        if self.index >= len(segments):
             return
+        segment = segments[self.index]
+        m = self._m + (real_units if segment.real_time else timebase_units) * self._scale
+        if m < 0:
+            m = 0
+        limit = self._limit
+        if limit is None:
+            exact = segment.duration_units * self._scale
+            limit = self._limit = -((-exact.numerator) // exact.denominator)
+        self._m = m
+        if m >= limit:
+            self._next_segments()
+
+    def _next_segments(self) -> None:
+        """The current segment has ended (``m >= limit``): go on, carrying the overrun (exact, once per segment)."""
+        local = Fraction(self._m, self._scale)
         segment = self.segments[self.index]
-        self.local_units = max(Fraction(0), self.local_units + (real_units if segment.real_time else timebase_units))
-        while self.local_units >= segment.duration_units:
-            leftover = self.local_units - segment.duration_units
+        while local >= segment.duration_units:
+            leftover = local - segment.duration_units
             for path in segment.paths:
                 self._held[path.axis] = path.target
             self.index += 1
             if self.done:
-                self.local_units = Fraction(0)
-                return
+                local = Fraction(0)
+                break
             carry = not segment.real_time and not self.segments[self.index].real_time
             segment = self.segments[self.index]
-            self.local_units = leftover if carry else Fraction(0)
+            local = leftover if carry else Fraction(0)
+        self._m, self._scale, self._limit = local.numerator, local.denominator, None
 
     def position(self, axis: str) -> Fraction:
-        """Commanded position of ``axis`` now [axis units]."""
-        if not self.done:
-            segment = self.segments[self.index]
-            for path in segment.paths:
-                if path.axis == axis:
-                    return path.position(self.local_units / UNITS_PER_MS)
-        return self._held.get(axis, Fraction(0))
+        """Commanded position of ``axis`` now [axis units] (exact)."""
+        numerator, denominator = self.position_ratio(axis)
+        return Fraction(numerator, denominator)
+
+    def position_ratio(self, axis: str) -> tuple[int, int]:
+        """Commanded position of ``axis`` now as ``(numerator, denominator)`` integers [axis units]."""
+        if self.index < len(self.segments):
+            pieces = self.segments[self.index].integer_pieces(axis, self._scale)
+            if pieces is not None:
+                return pieces.numerator(self._m), pieces.denominator
+        held = self._held.get(axis)
+        if held is None:
+            return 0, 1
+        return held.numerator, held.denominator

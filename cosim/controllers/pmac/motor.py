@@ -59,8 +59,11 @@ class Motor:
         self.counts_per_unit = validate.exact(counts_per_unit, f"counts_per_unit of motor {number}")
         self.loop = loop
         self.feedback = feedback
-        self.cmd = Fraction(0)
+        self._cmd_ratio = (0, 1)
         self.act: float = 0.0
+        scale = self.counts_per_unit
+        self._scale = (scale.numerator, scale.denominator)
+        self._last: list[float | None] = [None, None, None, None]  # cmd, act, following error, sync error
         p = f"{device}.motor{number}"
         self._cmd = Signal(sim, f"{p}.cmd_pos", kind="real", unit="counts", description="commanded position")
         self._act = Signal(sim, f"{p}.act_pos", kind="real", unit="counts", description="actual position")
@@ -69,19 +72,47 @@ class Motor:
                             description="master-derived position - actual (slip + following error)")
         self.dac = Signal(sim, f"{p}.dac", kind="int", unit="bits", description="16-bit DAC output")
 
+    @property
+    def cmd(self) -> Fraction:
+        """Commanded position [counts] (exact), as of the last servo cycle."""
+        return Fraction(*self._cmd_ratio)
+
     def update(self, cycle: int, t: int) -> None:
-        """One servo cycle: command, feedback, PID, DAC."""
-        self.cmd = self.cs.position(self.axis) * self.counts_per_unit
-        ideal = self.cs.ideal_position(self.axis) * self.counts_per_unit
-        if self.loop is not None:
-            if self.feedback is None:
+        """One servo cycle: command, feedback, PID, DAC.
+
+        The command is the exact ratio of integers the coordinate system gives, times the scale;
+        its float (``numerator / denominator``, correctly rounded) is what the PID and the trace see.
+        """
+        scale_num, scale_den = self._scale
+        num, den = self.cs.position_ratio(self.axis)
+        num *= scale_num
+        den *= scale_den
+        self._cmd_ratio = (num, den)
+        cmd = num / den
+        ideal_num, ideal_den = self.cs.position_ratio(self.axis, ideal=True)
+        ideal = ideal_num * scale_num / (ideal_den * scale_den)
+        loop = self.loop
+        if loop is not None:
+            feedback = self.feedback
+            if feedback is None:
                 raise ConfigurationError(f"motor {self.number} has a position loop but no feedback; "
                                          "set motor.feedback to a callable returning counts")
-            self.act = float(self.feedback())
-            self.dac.set(self.loop.update(float(self.cmd) - self.act))
+            act = self.act = float(feedback())
+            self.dac.set(loop.update(cmd - act))
         else:
-            self.act = float(self.feedback()) if self.feedback is not None else float(self.cmd)
-        self._cmd.set(float(self.cmd))
-        self._act.set(self.act)
-        self._ferr.set(float(self.cmd) - self.act)
-        self._sync.set(float(ideal) - self.act)
+            act = self.act = float(self.feedback()) if self.feedback is not None else cmd
+        last = self._last
+        if cmd != last[0]:
+            last[0] = cmd
+            self._cmd.set(cmd)
+        if act != last[1]:
+            last[1] = act
+            self._act.set(act)
+        error = cmd - act
+        if error != last[2]:
+            last[2] = error
+            self._ferr.set(error)
+        sync = ideal - act
+        if sync != last[3]:
+            last[3] = sync
+            self._sync.set(sync)

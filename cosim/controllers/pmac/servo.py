@@ -17,6 +17,9 @@ and the largest closed-loop pole radius (stable at the servo rate if below 1).
 
 The DAC output is a 16-bit value (+-32767, about +-10 V); the controller state keeps running
 when the output saturates (no anti-windup).
+
+python-control (which pulls in scipy and matplotlib) is imported inside the functions that design a
+loop, never at module level: a run that designs no loop does not pay for it.
 """
 
 from __future__ import annotations
@@ -26,7 +29,6 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-import control
 import numpy as np
 
 from cosim import validate
@@ -58,6 +60,8 @@ class MotorModel:
 
     def transfer_function(self) -> Any:
         """The continuous plant ``G(s)`` as a python-control transfer function."""
+        import control  # python-control (with scipy and matplotlib) only where a loop is designed
+
         return control.tf([self.gain_counts_per_s_per_bit], [self.tau_s, 1.0, 0.0])
 
 
@@ -167,6 +171,8 @@ def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integ
     -------
     PidDesign
     """
+    import control  # python-control (with scipy and matplotlib) only where a loop is designed
+
     validate.positive(period_s, "period_s", unit="s")
     rate_hz = 1.0 / period_s
     validate.in_range(bandwidth_hz, "bandwidth_hz", low=0, low_open=True, high=rate_hz / 10,
@@ -213,12 +219,33 @@ class PidLoop:
     def __init__(self, design: PidDesign) -> None:
         self.design = design
         self._x = [0.0] * len(design.b)
+        self._rows = tuple(zip(design.a, design.b, strict=True))
 
     def update(self, error_counts: float) -> int:
-        """Following error [counts] in, DAC value [bits] out (clamped to +-32767)."""
+        """Following error [counts] in, DAC value [bits] out (clamped to +-32767).
+
+        ``u = C x + D e`` and ``x <- A x + B e``, each sum taken left to right from 0 (the same
+        floats in the same order whatever the state's size).
+        """
         d = self.design
         x = self._x
-        u = sum(ci * xi for ci, xi in zip(d.c, x, strict=True)) + d.d * error_counts
-        self._x = [sum(aij * xj for aij, xj in zip(row, x, strict=True)) + bi * error_counts
-                   for row, bi in zip(d.a, d.b, strict=True)]
+        if len(x) == 2:  # the designed PID's order: the same sums, unrolled
+            x0, x1 = x
+            (a00, a01), b0 = self._rows[0]
+            (a10, a11), b1 = self._rows[1]
+            c0, c1 = d.c
+            u = 0.0 + c0 * x0 + c1 * x1 + d.d * error_counts
+            self._x = [0.0 + a00 * x0 + a01 * x1 + b0 * error_counts, 0.0 + a10 * x0 + a11 * x1 + b1 * error_counts]
+            return max(-DAC_MAX, min(DAC_MAX, round(u)))
+        u = 0.0
+        for ci, xi in zip(d.c, x):
+            u += ci * xi
+        u += d.d * error_counts
+        new = []
+        for row, bi in self._rows:
+            acc = 0.0
+            for aij, xj in zip(row, x):
+                acc += aij * xj
+            new.append(acc + bi * error_counts)
+        self._x = new
         return max(-DAC_MAX, min(DAC_MAX, round(u)))
