@@ -33,13 +33,14 @@ advance, the feeder may queue more (:meth:`CoordinateSystem.queue`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol
 
 from cosim import validate
-from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner, Segment, compile_item
+from cosim.controllers.pmac.motion import Item, LinearMove, Segment, compile_item
+from cosim.controllers.pmac.runner import ProgramRunner
 from cosim.controllers.pmac.units import IX94_ALLOWED, IX94_DEFAULT, IX94_MAX, REG_MAX, hexaddr, percent
 from cosim.errors import ConfigurationError
 from cosim.signals import Signal
@@ -180,6 +181,9 @@ class CoordinateSystem:
         self._started = False
         self._last: list[int | bool | None] = [None, None, None, None]  # actual, source, limited, slip as recorded
         self._dwell_noted = False
+        self._program_name: str | None = None
+        #: Called with (program name, True) when a program starts and (name, False) when it reaches its end.
+        self.on_program: Callable[[str, bool], None] | None = None
         p = f"{device}.cs{number}"
         self._tb = Signal(sim, f"{p}.timebase", kind="int", unit="2^-23 ms", description="actual time-base value")
         self._pct = Signal(sim, f"{p}.timebase_pct", kind="real", unit="%", description="actual time base in %")
@@ -234,17 +238,41 @@ class CoordinateSystem:
         return percent(self.actual, self.i10)
 
     # -- programs ---------------------------------------------------------------------------
-    def run_program(self, items: Iterable[Item]) -> None:
+    def run_program(self, items: Iterable[Item], *, name: str = "") -> None:
         """Start a motion program (a list of moves); it begins at the next servo cycle."""
         if not self.program_done:
             raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
         self._pending = list(items)
+        self._program_name = name or f"CS{self.number} program"
 
-    def run_feeder(self, feeder: Feeder) -> None:
+    def run_feeder(self, feeder: Feeder, *, name: str = "") -> None:
         """Start a motion program that is calculated as it runs; it begins at the next servo cycle."""
         if not self.program_done:
             raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
         self._pending = feeder
+        self._program_name = name or f"CS{self.number} program"
+
+    def abort(self, reason: str) -> None:
+        """``A``/``K``/``^A``: the program stops now; every axis holds its commanded position (no deceleration)."""
+        positions = {axis: self.position(axis) for axis in self.axes}
+        ideal = {axis: self.ideal_position(axis) for axis in self.axes}
+        self._pending = self._feeder = None
+        self._runner = ProgramRunner([], positions)
+        self._ideal = ProgramRunner([], ideal)
+        self.axes = positions
+        self.notes.append((self.sim.now, reason))
+        self._program_name = None
+
+    def set_positions(self, positions: dict[str, Fraction]) -> None:
+        """Where the axes are (forward kinematics at ``R`` or ``PMATCH``), while no program runs."""
+        if not self.program_done:
+            raise ConfigurationError(f"coordinate system {self.number}: axis positions change only while no "
+                                     "program runs")
+        current = {axis: self.position(axis) for axis in self.axes}
+        current.update(positions)
+        self.axes = current
+        self._runner = ProgramRunner([], current)
+        self._ideal = ProgramRunner([], dict(current))
 
     def queue(self, item: Item) -> int:
         """Append a move to the running program (from a feeder); returns its segment index."""
@@ -371,6 +399,8 @@ class CoordinateSystem:
         self._ideal = ProgramRunner([], ideal)
         self._end, self._ideal_end = dict(start), dict(ideal)
         self.axes = start
+        if self.on_program is not None and self._program_name is not None:
+            self.on_program(self._program_name, True)
         if isinstance(pending, list):
             self._feeder = None
             for item in pending:
@@ -396,6 +426,14 @@ class CoordinateSystem:
             feeder.calculate(self, t)
             if feeder.finished and self._runner.done:
                 self._feeder = None
+                self._ended()
+        elif self._runner.done:
+            self._ended()
+
+    def _ended(self) -> None:
+        name, self._program_name = self._program_name, None
+        if name is not None and self.on_program is not None:
+            self.on_program(name, False)
 
     def describe_source(self) -> str:
         """Ix93 as text, e.g. ``$2000 (CS1 % register)``."""

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 from cosim import validate
-from cosim.controllers.pmac.pieces import IntegerPieces, Piece, scale
+from cosim.controllers.pmac.paths import Arc, AxisPath, CirclePath, HermitePath, Path
 from cosim.controllers.pmac.profile import Profile
 from cosim.controllers.pmac.units import UNITS_PER_MS
 from cosim.errors import ConfigurationError
@@ -91,6 +91,7 @@ class Move:
     tm_ms: Number | None = None
     ta_ms: Number = 10
     ts_ms: Number = 0
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if (self.feedrate is None) == (self.tm_ms is None):
@@ -117,9 +118,45 @@ class RapidAxis:
 
 @dataclass(frozen=True)
 class RapidMove:
-    """RAPID: each axis to its target on its own profile (not coordinated)."""
+    """RAPID: each axis to its target on its own profile (not coordinated); followers on the longest one."""
 
     axes: Mapping[str, RapidAxis]
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class PvtMove:
+    """PVT / SPLINE1: each axis from its position and velocity ``v0`` to ``targets`` at ``v1`` in ``t_ms``.
+
+    Velocities in axis units/ms. Followers (kinematic motors) move linearly in time.
+    """
+
+    targets: Mapping[str, Fraction]
+    v0: Mapping[str, Fraction]
+    v1: Mapping[str, Fraction]
+    t_ms: Fraction
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CircleMove:
+    """CIRCLE1 (clockwise) / CIRCLE2: an arc in the plane ``plane`` (two axes), other axes helical.
+
+    The centre is given as ``centre`` (the vector from the start point to it, in the plane's axes)
+    or as ``radius`` (> 0: the short arc, < 0: the long one). Speed F [units/s] along the path, or
+    move time TM, with TA and TS as a LINEAR move.
+    """
+
+    targets: Mapping[str, Fraction]
+    plane: tuple[str, str]
+    clockwise: bool
+    centre: tuple[Fraction, Fraction] | None = None
+    radius: Fraction | None = None
+    feedrate: Fraction | None = None
+    tm_ms: Fraction | None = None
+    ta_ms: Fraction = Fraction(10)
+    ts_ms: Fraction = Fraction(0)
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -142,37 +179,7 @@ class Dwell:
         object.__setattr__(self, "ms", validate.positive(self.ms, "DWELL time", unit="ms", zero=True))
 
 
-Item = LinearMove | Move | RapidMove | Delay | Dwell
-
-
-@dataclass(frozen=True)
-class AxisPath:
-    """What one axis does in a segment: from ``start`` to ``target`` along ``profile``.
-
-    The axis is at ``start + (target - start) * travelled / profile.distance`` (a LINEAR move of
-    several axes shares one profile over the path length).
-    """
-
-    axis: str
-    start: Fraction
-    target: Fraction
-    profile: Profile
-
-    def position(self, tau_ms: Fraction) -> Fraction:
-        """Position at ``tau_ms`` into the segment [axis units] (exact; the reference for :meth:`pieces`)."""
-        if self.profile.distance == 0:
-            return self.target if tau_ms >= self.profile.total_ms else self.start
-        if tau_ms >= self.profile.total_ms:
-            return self.target
-        return self.start + (self.target - self.start) * self.profile.travelled(tau_ms) / self.profile.distance
-
-    def pieces(self) -> list[Piece]:
-        """:meth:`position` as polynomial pieces in ``tau`` [ms] (see :mod:`.pieces`)."""
-        profile = self.profile
-        if profile.distance == 0:
-            return [Piece(profile.total_ms, False, (self.start,)), Piece(None, False, (self.target,))]
-        factor = (self.target - self.start) / profile.distance
-        return [Piece(p.bound, p.closed, scale(p.poly, factor, self.start)) for p in profile.pieces()]
+Item = LinearMove | Move | RapidMove | PvtMove | CircleMove | Delay | Dwell
 
 
 @dataclass(frozen=True)
@@ -191,8 +198,15 @@ class Segment:
 
     real_time: bool
     duration_units: Fraction
-    paths: tuple[AxisPath, ...] = ()
-    _integer: dict[tuple[str, int], IntegerPieces] = field(default_factory=dict, compare=False, repr=False)
+    paths: tuple[Path, ...] = ()
+    _by_axis: dict[str, Path] = field(default_factory=dict, compare=False, repr=False, init=False)
+
+    def __post_init__(self) -> None:
+        self._by_axis.update({p.axis: p for p in reversed(self.paths)})
+
+    def path(self, axis: str) -> Path | None:
+        """The path of ``axis`` in this segment (None: it does not move here)."""
+        return self._by_axis.get(axis)
 
     @property
     def axis(self) -> str | None:
@@ -205,19 +219,24 @@ class Segment:
         return self.paths[0].target if self.paths else Fraction(0)
 
     @property
+    def profile(self) -> Profile | None:
+        """The first axis's profile (None for holds and PVT/spline segments)."""
+        return getattr(self.paths[0], "profile", None) if self.paths else None
+
+    @property
     def speed(self) -> Fraction:
         """Plateau speed of the first axis's profile [units/ms]."""
-        return self.paths[0].profile.speed if self.paths else Fraction(0)
+        return self.profile.speed if self.profile is not None else Fraction(0)
 
     @property
     def ta_ms(self) -> Fraction:
         """Acceleration time of the first axis's profile [ms]."""
-        return self.paths[0].profile.accel_ms if self.paths else Fraction(0)
+        return self.profile.accel_ms if self.profile is not None else Fraction(0)
 
     @property
     def move_ms(self) -> Fraction:
         """Move time of the first axis's profile [ms]."""
-        return self.paths[0].profile.move_ms if self.paths else Fraction(0)
+        return self.profile.move_ms if self.profile is not None else Fraction(0)
 
     def position(self, tau_ms: Fraction, axis: str | None = None) -> Fraction:
         """Position of ``axis`` (default: the first moving axis) at ``tau_ms`` into the segment (exact)."""
@@ -225,17 +244,6 @@ class Segment:
             if axis is None or path.axis == axis:
                 return path.position(tau_ms)
         raise ConfigurationError.out_of_range("axis of Segment.position", axis, ", ".join(p.axis for p in self.paths))
-
-    def integer_pieces(self, axis: str, scale_units: int) -> IntegerPieces | None:
-        """``axis``'s position for elapsed times of ``m / scale_units`` time-base units (None: not moving here)."""
-        key = (axis, scale_units)
-        found = self._integer.get(key)
-        if found is None:
-            path = next((p for p in self.paths if p.axis == axis), None)
-            if path is None:
-                return None
-            found = self._integer[key] = IntegerPieces(path.pieces(), scale_units * UNITS_PER_MS)
-        return found
 
 
 def path_length(deltas: Iterable[Fraction]) -> Fraction:
@@ -267,20 +275,92 @@ def compile_item(item: Item, current: dict[str, Fraction]) -> Segment:
                                tm_ms=None if item.tm_ms is None else Fraction(item.tm_ms))
         paths = tuple(AxisPath(a, current[a], t, profile) for a, t in targets.items())
         current.update(targets)
-        return Segment(False, profile.total_ms * UNITS_PER_MS, paths)
+        return Segment(False, profile.total_ms * UNITS_PER_MS, paths + _followers(item.followers, profile, current))
     if isinstance(item, RapidMove):
         _check_axes(item.axes, current, "RAPID move")
         paths = tuple(AxisPath(a, current[a], r.target,
                                Profile.plan(abs(r.target - current[a]), ta_ms=r.ta_ms, ts_ms=r.ts_ms, speed=r.speed))
                       for a, r in item.axes.items())
         current.update({a: r.target for a, r in item.axes.items()})
-        longest = max((p.profile.total_ms for p in paths), default=Fraction(0))
-        return Segment(False, longest * UNITS_PER_MS, paths)
+        longest = max((p.profile for p in paths), key=lambda p: p.total_ms, default=None)
+        followers = _followers(item.followers, longest, current) if longest is not None else ()
+        return Segment(False, (longest.total_ms if longest is not None else Fraction(0)) * UNITS_PER_MS,
+                       paths + followers)
+    if isinstance(item, PvtMove):
+        _check_axes(item.targets, current, "PVT/SPLINE move")
+        t = item.t_ms
+        pvt: tuple[Path, ...] = tuple(HermitePath(a, current[a], target, item.v0.get(a, Fraction(0)),
+                                                  item.v1.get(a, Fraction(0)), t) for a, target in item.targets.items())
+        pvt += tuple(HermitePath(a, current.get(a, Fraction(0)), target, (target - current.get(a, Fraction(0))) / t,
+                                 (target - current.get(a, Fraction(0))) / t, t) for a, target in item.followers.items())
+        current.update(item.targets)
+        current.update(item.followers)
+        return Segment(False, t * UNITS_PER_MS, pvt)
+    if isinstance(item, CircleMove):
+        return compile_circle(item, current)
     if isinstance(item, Delay):
         return Segment(False, Fraction(item.ms) * UNITS_PER_MS)
     if isinstance(item, Dwell):
         return Segment(True, Fraction(item.ms) * UNITS_PER_MS)
     raise ConfigurationError(f"program item {item!r} is not a LinearMove, Move, RapidMove, Delay or Dwell")
+
+
+def _followers(followers: Mapping[str, Fraction], profile: Profile, current: dict[str, Fraction]
+               ) -> tuple[Path, ...]:
+    """Kinematic motors of a move: each from its count now to its end count along the move's profile."""
+    paths = tuple(AxisPath(name, current.get(name, Fraction(0)), target, profile) for name, target in followers.items())
+    current.update(followers)
+    return paths
+
+
+def _arc(item: CircleMove, start: tuple[Fraction, Fraction], end: tuple[Fraction, Fraction]) -> Arc:
+    """The arc from ``start`` to ``end`` (plane coordinates) about the item's centre or with its radius."""
+    sx, sy = float(start[0]), float(start[1])
+    ex, ey = float(end[0]), float(end[1])
+    direction = -1.0 if item.clockwise else 1.0
+    if item.centre is not None:
+        cx, cy = sx + float(item.centre[0]), sy + float(item.centre[1])
+    else:
+        assert item.radius is not None
+        r = abs(float(item.radius))
+        mx, my = (sx + ex) / 2, (sy + ey) / 2
+        half = math.hypot(ex - sx, ey - sy) / 2
+        if half == 0 or half > r * (1 + 1e-12):
+            raise ConfigurationError(f"CIRCLE with R{item.radius}: the end point is {2 * half:.6g} units from the "
+                                     f"start, farther than the diameter {2 * r:.6g}")
+        h = math.sqrt(max(r * r - half * half, 0.0))
+        ux, uy = (ex - sx) / (2 * half), (ey - sy) / (2 * half)
+        side = direction * (1.0 if item.radius > 0 else -1.0)  # the short arc turns the centre to this side
+        cx, cy = mx - side * h * uy, my + side * h * ux
+    r0, r1 = math.hypot(sx - cx, sy - cy), math.hypot(ex - cx, ey - cy)
+    if r0 == 0:
+        raise ConfigurationError("CIRCLE: the centre is the start point (radius 0)")
+    a0, a1 = math.atan2(sy - cy, sx - cx), math.atan2(ey - cy, ex - cx)
+    sweep = (a1 - a0) * direction % (2 * math.pi)
+    if sweep < 1e-12 and item.centre is not None:
+        sweep = 2 * math.pi  # end = start about a centre: a full circle
+    return Arc((cx, cy), a0, direction * sweep, r0, r1)
+
+
+def compile_circle(item: CircleMove, current: dict[str, Fraction]) -> Segment:
+    """A CIRCLE move as a segment: the plane's axes on the arc, the others (and followers) linearly along it."""
+    _check_axes(item.targets, current, "CIRCLE move")
+    first, second = item.plane
+    for axis in item.plane:
+        current.setdefault(axis, Fraction(0))
+    start = (current[first], current[second])
+    end = (item.targets.get(first, current[first]), item.targets.get(second, current[second]))
+    arc = _arc(item, start, end)
+    linear = {a: t for a, t in item.targets.items() if a not in item.plane}
+    arc_length = abs(arc.sweep) * (arc.radius0 + arc.radius1) / 2
+    distance = Fraction(math.sqrt(arc_length**2 + sum(float(t - current[a]) ** 2 for a, t in linear.items())))
+    speed = item.feedrate / 1000 if item.feedrate is not None else None
+    profile = Profile.plan(distance, ta_ms=item.ta_ms, ts_ms=item.ts_ms, speed=speed, tm_ms=item.tm_ms)
+    paths: tuple[Path, ...] = (CirclePath(first, start[0], end[0], profile, arc, 0),
+                               CirclePath(second, start[1], end[1], profile, arc, 1))
+    paths += tuple(AxisPath(a, current[a], t, profile) for a, t in linear.items())
+    current.update({first: end[0], second: end[1], **linear})
+    return Segment(False, profile.total_ms * UNITS_PER_MS, paths + _followers(item.followers, profile, current))
 
 
 def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> list[Segment]:
@@ -289,106 +369,3 @@ def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> l
     return [compile_item(item, current) for item in items]
 
 
-class ProgramRunner:
-    """Runs compiled segments, advanced once per servo cycle, in integers.
-
-    Segments may be appended while it runs (a motion program calculates ahead): the list is
-    shared with a second runner advanced by another clock (the coordinate system's ideal,
-    master-derived one). A segment that ends with nothing queued after it loses its overrun.
-
-    The time into the current segment is ``m / scale`` time-base units (2^-23 ms) with integers
-    ``m`` and ``scale``: ``scale`` is 1 unless time carried over from the segment before has a
-    denominator (a move whose length is not a whole number of units), and each cycle adds
-    ``value * scale`` to ``m``. Positions are read as exact ratios of integers
-    (:meth:`position_ratio`, from :meth:`Segment.integer_pieces`).
-
-    Parameters
-    ----------
-    segments : list of Segment
-        The program's segments (appended to as the program is calculated).
-    positions : mapping
-        Starting position of every axis of the coordinate system [axis units].
-    """
-
-    def __init__(self, segments: list[Segment], positions: Mapping[str, Fraction]) -> None:
-        self.segments = segments
-        self.positions = positions
-        self.index = 0
-        self._m = 0
-        self._scale = 1
-        self._limit: int | None = None  # ceil(duration * scale) of the current segment, once known
-        self._held = dict(positions)
-
-    @classmethod
-    def of(cls, items: Iterable[Item], positions: Mapping[str, Fraction]) -> ProgramRunner:
-        """A runner over ``items`` compiled from ``positions``."""
-        return cls(compile_items(items, positions), positions)
-
-    @property
-    def local_units(self) -> Fraction:
-        """Time into the current segment [2^-23 ms] (exact)."""
-        return Fraction(self._m, self._scale)
-
-    @property
-    def done(self) -> bool:
-        """True once every queued segment has finished."""
-        return self.index >= len(self.segments)
-
-    @property
-    def in_dwell(self) -> bool:
-        """True while the current segment is a DWELL."""
-        return self.index < len(self.segments) and self.segments[self.index].real_time
-
-    def queued_ahead(self) -> int:
-        """Segments not finished yet (the current one included) that take time or wait in real time."""
-        return sum(1 for s in self.segments[self.index:] if s.real_time or s.duration_units > 0)
-
-    def advance(self, timebase_units: int, real_units: int) -> None:
-        """Advance by one servo cycle: ``timebase_units`` (time base) or ``real_units`` (I10) in a dwell."""
-        segments = self.segments
-        if self.index >= len(segments):
-            return
-        segment = segments[self.index]
-        m = self._m + (real_units if segment.real_time else timebase_units) * self._scale
-        if m < 0:
-            m = 0
-        limit = self._limit
-        if limit is None:
-            exact = segment.duration_units * self._scale
-            limit = self._limit = -((-exact.numerator) // exact.denominator)
-        self._m = m
-        if m >= limit:
-            self._next_segments()
-
-    def _next_segments(self) -> None:
-        """The current segment has ended (``m >= limit``): go on, carrying the overrun (exact, once per segment)."""
-        local = Fraction(self._m, self._scale)
-        segment = self.segments[self.index]
-        while local >= segment.duration_units:
-            leftover = local - segment.duration_units
-            for path in segment.paths:
-                self._held[path.axis] = path.target
-            self.index += 1
-            if self.done:
-                local = Fraction(0)
-                break
-            carry = not segment.real_time and not self.segments[self.index].real_time
-            segment = self.segments[self.index]
-            local = leftover if carry else Fraction(0)
-        self._m, self._scale, self._limit = local.numerator, local.denominator, None
-
-    def position(self, axis: str) -> Fraction:
-        """Commanded position of ``axis`` now [axis units] (exact)."""
-        numerator, denominator = self.position_ratio(axis)
-        return Fraction(numerator, denominator)
-
-    def position_ratio(self, axis: str) -> tuple[int, int]:
-        """Commanded position of ``axis`` now as ``(numerator, denominator)`` integers [axis units]."""
-        if self.index < len(self.segments):
-            pieces = self.segments[self.index].integer_pieces(axis, self._scale)
-            if pieces is not None:
-                return pieces.numerator(self._m), pieces.denominator
-        held = self._held.get(axis)
-        if held is None:
-            return 0, 1
-        return held.numerator, held.denominator

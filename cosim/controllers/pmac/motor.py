@@ -50,9 +50,13 @@ class Motor:
 
     def __init__(self, sim: Simulation, number: int, cs: CoordinateSystem, *, axis: str = "X",
                  counts_per_unit: int | Fraction = 1, loop: PidLoop | None = None,
-                 feedback: Callable[[], int | float] | None = None, device: str = "pmac") -> None:
-        if axis not in cs.axes:
-            raise ConfigurationError.out_of_range(f"axis of motor {number}", axis, ", ".join(cs.axes))
+                 feedback: Callable[[], int | float] | None = None, device: str = "pmac",
+                 terms: tuple[tuple[Fraction, str], ...] | None = None, offset: Fraction = Fraction(0)) -> None:
+        for name in (a for _c, a in terms) if terms else (axis,):
+            if name not in cs.axes:
+                raise ConfigurationError.out_of_range(f"axis of motor {number}", name, ", ".join(cs.axes))
+        self.terms = tuple((Fraction(c), a) for c, a in terms) if terms else None
+        self.offset = Fraction(offset)
         self.number = number
         self.cs = cs
         self.axis = axis
@@ -77,20 +81,44 @@ class Motor:
         """Commanded position [counts] (exact), as of the last servo cycle."""
         return Fraction(*self._cmd_ratio)
 
+    @property
+    def cmd_ratio(self) -> tuple[int, int]:
+        """Commanded position [counts] as ``(numerator, denominator)``."""
+        return self._cmd_ratio
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        """The axes the motor follows (one, or the terms of a linear combination)."""
+        return tuple(a for _c, a in self.terms) if self.terms else (self.axis,)
+
+    def _combination(self, ideal: bool) -> tuple[int, int]:
+        """``sum(c_i * axis_i) + offset`` [counts], exact (a motor defined on several axes)."""
+        assert self.terms is not None
+        total = self.offset
+        for coefficient, axis in self.terms:
+            total += coefficient * Fraction(*self.cs.position_ratio(axis, ideal=ideal))
+        return total.numerator, total.denominator
+
     def update(self, cycle: int, t: int) -> None:
         """One servo cycle: command, feedback, PID, DAC.
 
         The command is the exact ratio of integers the coordinate system gives, times the scale;
         its float (``numerator / denominator``, correctly rounded) is what the PID and the trace see.
         """
-        scale_num, scale_den = self._scale
-        num, den = self.cs.position_ratio(self.axis)
-        num *= scale_num
-        den *= scale_den
-        self._cmd_ratio = (num, den)
-        cmd = num / den
-        ideal_num, ideal_den = self.cs.position_ratio(self.axis, ideal=True)
-        ideal = ideal_num * scale_num / (ideal_den * scale_den)
+        if self.terms is not None:
+            num, den = self._cmd_ratio = self._combination(False)
+            cmd = num / den
+            ideal_num, ideal_den = self._combination(True)
+            ideal = ideal_num / ideal_den
+        else:
+            scale_num, scale_den = self._scale
+            num, den = self.cs.position_ratio(self.axis)
+            num *= scale_num
+            den *= scale_den
+            self._cmd_ratio = (num, den)
+            cmd = num / den
+            ideal_num, ideal_den = self.cs.position_ratio(self.axis, ideal=True)
+            ideal = ideal_num * scale_num / (ideal_den * scale_den)
         loop = self.loop
         if loop is not None:
             feedback = self.feedback
