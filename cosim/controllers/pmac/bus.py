@@ -11,6 +11,10 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
+    from cosim.controllers.pmac.coord import CoordinateSystem
+    from cosim.controllers.pmac.ect import ConversionTable
+    from cosim.controllers.pmac.motor import Motor
+    from cosim.job import Job
     from cosim.kernel import Simulation
 
 Value = int | Fraction
@@ -58,4 +62,51 @@ class Registers(Protocol):
 
     def register_is_volatile(self, space: str, address: int) -> bool:
         """True if the register changes by itself (encoder counts, captures, table results)."""
+        ...
+
+
+class Controller(Registers, Protocol):
+    """Everything the program system (:mod:`.runtime`, :mod:`.commands`) asks of a PMAC (:class:`~.machine.Pmac`)."""
+
+    table: ConversionTable
+    cs: dict[int, CoordinateSystem]
+    motors: dict[int, Motor]
+    job: Job
+
+    def build_table(self, lines: dict[int, int], *, where: dict[int, str]) -> None:
+        """Build the conversion table from setup lines."""
+        ...
+
+    def coordinate_system(self, number: int) -> CoordinateSystem:
+        """Coordinate system ``&number`` (created on first use)."""
+        ...
+
+    def motor_axes(self, cs: int) -> set[str]:
+        """Axes of coordinate system ``cs`` that a motor is assigned to."""
+        ...
+
+    def inverse_motors(self, cs: int) -> list[int]:
+        """Motors ``#n->I`` of coordinate system ``cs``."""
+        ...
+
+    def rapid_parameters(self, cs: int, axis: str) -> tuple[Fraction, Fraction, Fraction]:
+        """RAPID speed [units/ms], TA and TS [ms] of ``axis``."""
+        ...
+
+    def command_percent(self, number: int, pct: int | Fraction) -> int:
+        """``&x %n``."""
+        ...
+
+    def define_motor(self, number: int, *, cs: int, axis: str | None = None, counts_per_unit: int | Fraction = 1,
+                     terms: tuple[tuple[Fraction, str], ...] | None = None, offset: Fraction = Fraction(0),
+                     where: str = "") -> Motor:
+        """``#n->...``: a motor on a linear combination of axes."""
+        ...
+
+    def define_kinematic_motor(self, number: int, *, cs: int, inverse: bool, where: str = "") -> Motor | None:
+        """``#n->I`` or ``#n->0``."""
+        ...
+
+    def undefine(self, cs: int | None, *, where: str = "") -> None:
+        """``UNDEFINE`` or ``UNDEFINE ALL``."""
         ...

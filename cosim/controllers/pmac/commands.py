@@ -26,6 +26,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.controllers.pmac import ivartable
+from cosim.controllers.pmac.bus import Controller
 from cosim.controllers.pmac.evaluate import expression, variable_number
 from cosim.controllers.pmac.interpreter import Context, Session
 from cosim.controllers.pmac.nodes import (
@@ -67,7 +68,6 @@ from cosim.controllers.pmac.nodes import (
 )
 
 if TYPE_CHECKING:
-    from cosim.controllers.pmac.machine import Pmac
     from cosim.controllers.pmac.mvars import Memory
 
 
@@ -82,7 +82,7 @@ class _Frame:
 class Commands:
     """Mixin of :class:`~.runtime.Programs`: online commands and program statements that act."""
 
-    pmac: Pmac
+    pmac: Controller
     memory: Memory
     host: Session
     enabled: set[int]

@@ -60,7 +60,7 @@ online_line: _online*
 _online: cs_select | motor_select | motor_def | motor_query | open_buffer | close_buffer | clear_buffer | begin
        | cs_command | p0_assign
        | percent | percent_query | assign | range_assign | mdef | mdef_query | query | range_query | plc_control
-       | motor_command | axis_set | control_char | frax | pmatch | home | other_online | undefine
+       | motor_command | axis_set | control_char | frax | pmatch | home_cmd | other_online | undefine
 
 cs_select: "&" data
 motor_select: "#" data
@@ -104,7 +104,7 @@ axis_set: AXIS "=" data
 control_char: CTRL
 frax: FRAX_KW ["(" AXIS ("," AXIS)* ")"]
 pmatch: PMATCH_KW
-home: HOME_KW [plc_list]
+home_cmd: HOME_KW [plc_list]
 undefine: UNDEFINE_KW [ALL_KW]
 other_online: OTHER_ON [REST]
             | OTHER_SYM [REST]
@@ -113,7 +113,7 @@ program_line: [label] _stmt*
 label: _N INT
 _stmt: assign | mod_assign | move | mode | modal_axes | param | dwell | delay | if_head | while_head | else_head
      | endif | endwhile | cont | goto | gosub | call | return | plc_control | cmd | send | display | address_cmd | frax
-     | home | normal | code_call | other_program | pmatch | pvt | close_buffer | clear_buffer
+     | home_cmd | normal | code_call | other_program | pmatch | pvt | close_buffer | clear_buffer
 
 mod_assign: MVAR MOD_OP expr
 move: move_word+ center_word*
@@ -190,7 +190,7 @@ CLOSE_KW.2: /CLOSE(?![A-Z])/i
 ALL_KW.2: /ALL(\s+PLCS)?(?![A-Z])/i
 UNDEFINE_KW.3: /UNDEFINE(?![A-Z])/i
 _B.2: /B(?=\s*[0-9($@-])/i
-CS_LETTER.2: /[RSHAQK](?![A-Z0-9]|\s*[-+=(.0-9$])/i | "/" | "\\"
+CS_LETTER.2: /[RSHAQK](?![A-Z0-9]|\s*[-+=(.0-9$])/i | /[\/\\](?!\s*[-+(.0-9$@A-Za-z])/
 PERCENT_Q: /%(?!\s*[0-9.($@+-])/
 PERCENT_SET: /%(?=\s*[0-9.($@+-])/
 _DOTS: ".."

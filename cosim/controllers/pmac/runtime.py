@@ -63,6 +63,7 @@ from cosim.controllers.pmac.interpreter import (
     Session,
     run_to_end,
 )
+from cosim.controllers.pmac.bus import Controller
 from cosim.controllers.pmac.mvars import Memory
 from cosim.controllers.pmac.nodes import (
     Assign,
@@ -85,8 +86,6 @@ from cosim.controllers.pmac.syntax import parse_line
 from cosim.job import JobState
 from cosim.timebase import Priority
 
-if TYPE_CHECKING:
-    from cosim.controllers.pmac.machine import Pmac
 
 #: Default background (PLC) scan period [ns]: a lightly loaded controller.
 PLC_SCAN_PERIOD_NS = 200_000
@@ -111,7 +110,7 @@ class Programs(Commands):
         The controller.
     """
 
-    def __init__(self, pmac: Pmac) -> None:
+    def __init__(self, pmac: Controller) -> None:
         self.pmac = pmac
         self.memory = Memory(pmac)
         self.memory.on_change = self.wake

@@ -162,6 +162,8 @@ def _syntax_error(exc: UnexpectedInput, text: str, *, context: str, pos: Pos) ->
         return pos.shifted(len(text.rstrip())).error("the statement is incomplete at the end of the line")
     col = exc.column if isinstance(exc.column, int) and exc.column > 0 else len(text) + 1
     start = col - 1
+    if start < len(text) and text[start].isdigit() and start > 0 and text[start - 1].isalpha():
+        start -= 1  # a letter and its number (X10): the word starts at the letter
     if start < len(text) and text[start].isalpha():
         while start > 0 and text[start - 1].isalpha():  # the whole word (F of FEED lexes as the F command)
             start -= 1
@@ -235,9 +237,9 @@ class _Converter:
         if kind in simple:
             return simple[kind](pos)
         if kind == "cs_select":
-            return CsSelect(pos, self.numbered(kids[0], "coordinate system &n", CS_RANGE))
+            return CsSelect(pos, self.numbered(kids[0], "coordinate system &n", CS_RANGE, pos))
         if kind == "motor_select":
-            return MotorSelect(pos, self.numbered(kids[0], "motor #n", MOTOR_RANGE))
+            return MotorSelect(pos, self.numbered(kids[0], "motor #n", MOTOR_RANGE, pos))
         if kind == "motor_def":
             return self.motor_def(pos, kids)
         if kind == "motor_query":
@@ -256,7 +258,7 @@ class _Converter:
             value = Num(arith.literal(str(kids[1]), where=str(pos)))
             return Assign(pos, Var("P", 0, pos), Neg(value) if kids[0] is not None and str(kids[0]) == "-" else value)
         if kind == "begin":
-            return Begin(pos, self.numbered(kids[0], "program number (Bn)", PROG_RANGE))
+            return Begin(pos, self.numbered(kids[0], "program number (Bn)", PROG_RANGE, pos))
         if kind == "cs_command":
             return CsCommand(pos, str(kids[0]).upper())
         if kind == "percent":
@@ -291,7 +293,7 @@ class _Converter:
             return Control(pos, self.control(kids[0]))
         if kind == "frax":
             return Frax(pos, str(kids[0]).upper(), tuple(str(k).upper() for k in kids[1:] if k is not None))
-        if kind == "home":
+        if kind == "home_cmd":
             motors = self.plc_numbers(kids[1], "motor of HOME", MOTOR_RANGE, pos) if kids[1] is not None else ()
             return Home(pos, str(kids[0]).upper(), motors)
         if kind in ("other_online", "other_program"):
@@ -340,9 +342,9 @@ class _Converter:
             cs = motor = None
             for item in kids:
                 if item.data == "address_cs":
-                    cs = self.numbered(item.children[0], "coordinate system of ADDRESS", CS_RANGE)
+                    cs = self.numbered(item.children[0], "coordinate system of ADDRESS", CS_RANGE, pos)
                 else:
-                    motor = self.numbered(item.children[0], "motor of ADDRESS", MOTOR_RANGE)
+                    motor = self.numbered(item.children[0], "motor of ADDRESS", MOTOR_RANGE, pos)
             return Address(pos, cs, motor)
         if kind == "normal":
             return Normal(pos, tuple(self.centre(k) for k in kids))
@@ -352,12 +354,11 @@ class _Converter:
             return CodeCall(pos, "M", Num(self.var(kids[0]).number))
         raise pos.error(f"statement {kind!r} is not supported")  # the grammar has no other
 
-    def numbered(self, node: Tree, name: str, bounds: tuple[int, int]) -> Expr:
+    def numbered(self, node: Tree, name: str, bounds: tuple[int, int], pos: Pos) -> Expr:
         """A number that may be computed (``&(P1)``): a constant is checked against ``bounds`` now."""
         expr = self.data(node)
         value = constant(expr)
         if value is not None:
-            pos = self.pos(node)
             if value != int(value):
                 raise pos.error(f"{name} = {value} is not allowed (allowed: integers {bounds[0]}..{bounds[1]})")
             _range(int(value), name, bounds, pos)
