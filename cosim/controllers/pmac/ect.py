@@ -130,14 +130,17 @@ class OneOverTEntry(Entry):
         self.channel_address = channel_address & _ADDRESS_MASK
         self.flags = channel_address & _FLAG_BIT
         self.position = 0
+        self.unconnected = False
         self._channel_obj: EncoderChannel | None = None
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
-        self._channel_obj = self._channel(channels, self.channel_address, "channel address")
+        """An encoder channel that no plant drives leaves the entry at 0 (listed by the machine as not modelled)."""
+        self._channel_obj = channels.get(self.channel_address)
+        self.unconnected = self._channel_obj is None
 
     def convert(self, t: int, table: ConversionTable) -> None:
-        assert self._channel_obj is not None
-        self.position = self._channel_obj.position(t, ONE_OVER_T_BITS)
+        if self._channel_obj is not None:
+            self.position = self._channel_obj.position(t, ONE_OVER_T_BITS)
 
     def x_word(self, offset: int) -> int:
         return self.position & REG_MASK

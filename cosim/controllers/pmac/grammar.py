@@ -44,15 +44,9 @@ OTHER_PROGRAM = (
 def _words(words: tuple[str, ...]) -> str:
     """A regex alternation of keywords, longest first, each ending at a word boundary.
 
-    The MACRO station commands (``MS0,MI910``, ``MSR1,...``, ``MS$$$0``) take their node number
-    right after the keyword.
+    A number may follow a keyword at once (``MS0,MI910``, ``MSR1``, ``LOCK4``, ``CCR2.5``).
     """
-    plain = sorted({w for w in words if not w.startswith("MS")}, key=lambda w: (-len(w), w))
-    macro = sorted({w for w in words if w.startswith("MS")}, key=lambda w: (-len(w), w))
-    alternatives = ["(?:" + "|".join(plain) + ")(?![A-Z0-9_])"]
-    if macro:
-        alternatives.append("(?:" + "|".join(macro) + ")(?![A-Z])")
-    return "(?:" + "|".join(alternatives) + ")"
+    return "(?:" + "|".join(sorted(set(words), key=lambda w: (-len(w), w))) + ")(?![A-Z_])"
 
 
 GRAMMAR = r"""
@@ -109,10 +103,10 @@ undefine: UNDEFINE_KW [ALL_KW]
 other_online: OTHER_ON [REST]
             | OTHER_SYM [REST]
 
-program_line: [label] _stmt*
+program_line: [label] [cont] _stmt*
 label: _N INT
 _stmt: assign | mod_assign | move | mode | modal_axes | param | dwell | delay | if_head | while_head | else_head
-     | endif | endwhile | cont | goto | gosub | call | return | plc_control | cmd | send | display | address_cmd | frax
+     | endif | endwhile | goto | gosub | call | return | plc_control | cmd | send | display | address_cmd | frax
      | home_cmd | normal | code_call | other_program | pmatch | pvt | close_buffer | clear_buffer
 
 mod_assign: MVAR MOD_OP expr
@@ -233,7 +227,7 @@ ABSINC.2: /(ABS|INC)(?=\s*\()/i
 PVT_KW: /PVT(?![A-Z])/i
 PARAM: /(TA|TS|TM|F)(?![A-Z])/i
 FUNC: /(ABS|INT|SIN|COS|TAN|ASIN|ACOS|ATAN2|ATAN|SQRT|LN|EXP|EXP2)(?=\s*\()/i
-CODE_LETTER: /[GMTD](?=\s*[0-9.(-])/i
+CODE_LETTER: /[GTD](?=\s*[0-9.(-])/i
 ARG_LETTER.-1: /[A-Z](?![A-Z])/i
 AXIS: /[XYZABCUVW](?![A-Z])/i
 CENTER: /[IJK](?![A-Z])/i

@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.bus import Value
 from cosim.controllers.pmac.evaluate import Evaluator, condition, expression
-from cosim.controllers.pmac.motion import CircleMove, Delay, Dwell, Item, Move, PvtMove, RapidAxis, RapidMove
+from cosim.controllers.pmac.motion import CircleMove, Delay, Dwell, Item, Move, PvtMove, RapidAxis, RapidMove, Segmented
 from cosim.controllers.pmac.mvars import Memory, check_number
 from cosim.controllers.pmac.nodes import (
     Assign,
@@ -496,7 +496,14 @@ class MotionProgram:
         targets = self.targets(stmt, cs)
         axes = {a: cs.program_end(a) for a in cs.axes if not a.startswith("#")}
         followers = self.host.kinematics(cs.number, {**axes, **targets}, stmt.pos)
-        scale_f = 1000 / Fraction(self.host.ivar(5000 + 100 * cs.number + 90))  # F per Isx90 ms -> per s
+        segment_ms = Fraction(self.host.ivar(5000 + 100 * cs.number + 13)) if followers else Fraction(0)
+        if segment_ms > 0:  # segmented (Isx13 > 0): the inverse kinematics at every segment point
+            followers = {}
+        time_units = Fraction(self.host.ivar(5000 + 100 * cs.number + 90))
+        if time_units == 0:
+            raise stmt.pos.error(f"I{5000 + 100 * cs.number + 90} (Isx90, feedrate time units) = 0: F needs a time "
+                                 "unit > 0 ms")
+        scale_f = 1000 / time_units  # F per Isx90 ms -> per s
         item: Item
         if modes.move == "RAPID":
             axes = {}
@@ -522,6 +529,9 @@ class MotionProgram:
             item = Move(targets, feedrate=modes.feedrate * scale_f, ta_ms=modes.ta_ms, ts_ms=modes.ts_ms,
                         followers=followers)
         self._flush_spline(cs)
+        if segment_ms > 0:
+            number, pos = cs.number, stmt.pos
+            item = Segmented(item, segment_ms, lambda positions: self.host.kinematics(number, positions, pos))
         cs.queue(item)
         return True
 

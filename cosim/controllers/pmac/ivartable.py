@@ -71,7 +71,8 @@ class Spec:
     default : int or Fraction
     unit : str
     kind : str
-        ``int`` (whole numbers), ``float`` (any number), ``positive`` (a number > 0) or ``address``.
+        ``int`` (whole numbers), ``float`` (any number), ``positive`` (the reference's "positive floating
+        point": a number >= 0) or ``address``.
     source : str
         ``SRM``, ``QRG`` or ``word`` (see the module doc).
     """
@@ -88,7 +89,7 @@ class Spec:
     def allowed(self) -> str:
         """The range as messages say it."""
         if self.kind == "positive":
-            return f"> 0{' and <= ' + str(self.high) if self.high is not None else ''}" + (
+            return f">= 0{' and <= ' + str(self.high) if self.high is not None else ''}" + (
                 f" ({self.unit})" if self.unit else "")
         kind = "integers " if self.kind in ("int", "address") else ""
         low = f"${self.low:X}" if self.kind == "address" and self.low is not None else self.low
@@ -344,8 +345,8 @@ def check(number: int, value: object, *, where: str = "") -> Value:
                                           allowed=item.allowed())
         return checked
     exact = validate.exact(value, what, where=where) if not isinstance(value, int | Fraction) else Fraction(value)
-    if item.kind == "positive":
-        if exact <= 0 or (item.high is not None and exact > item.high):
+    if item.kind == "positive":  # "positive floating point": 0 and more (I100..131=0 is a setup file's first line)
+        if exact < 0 or (item.high is not None and exact > item.high):
             raise ConfigurationError.out_of_range(what, value, item.allowed(), where=where)
     elif (item.low is not None and exact < item.low) or (item.high is not None and exact > item.high):
         raise ConfigurationError.out_of_range(what, value, item.allowed(), where=where)

@@ -38,6 +38,7 @@ from cosim.controllers.pmac.ect import (
 )
 from cosim.controllers.pmac.encoder import CAPTURE_OFFSET, EncoderChannel, EncoderSource
 from cosim.controllers.pmac.motor import Motor
+from cosim.controllers.pmac.interpreter import KINEMATIC_AXES
 from cosim.controllers.pmac.runtime import Programs
 from cosim.controllers.pmac.servo import PidLoop
 from cosim.controllers.pmac.setupfile import parse_setup
@@ -107,8 +108,12 @@ class Pmac:
         self._stale: Signal | None = None
         self._ivars: dict[int, int | Fraction] = {}
         self._timers: dict[tuple[int, int], tuple[int, int]] = {}
+        self._cycle0 = 0  # the first servo cycle (timers count from it)
         self.programs = Programs(self)
         self.job = Job(sim, device)
+        #: Values of ``$(NAME)`` template macros and the folders ``#include`` looks in (a machine file's).
+        self.defines: dict[str, str] = {}
+        self.include_path: list[Path] = []
 
     @property
     def started(self) -> bool:
@@ -209,8 +214,15 @@ class Pmac:
             del self.motors[number]
 
     def motor_axes(self, cs: int) -> set[str]:
-        """Axes of coordinate system ``cs`` that a motor is assigned to."""
-        return {name for m in self.motors.values() if m.cs.number == cs for name in m.axes if not name.startswith("#")}
+        """Axes a program of coordinate system ``cs`` may move: those a motor is assigned to, and with motors
+        ``#n->I`` (inverse kinematics) every axis letter A, B, C, U, V, W, X, Y, Z."""
+        axes = {name for m in self.motors.values() if m.cs.number == cs for name in m.axes if not name.startswith("#")}
+        if self.inverse_motors(cs):
+            system = self.coordinate_system(cs)
+            for name in KINEMATIC_AXES:
+                system.define_axis(name)
+            axes.update(KINEMATIC_AXES)
+        return axes
 
     def inverse_motors(self, cs: int) -> list[int]:
         """Motors ``#n->I`` of coordinate system ``cs``."""
@@ -226,7 +238,11 @@ class Pmac:
     def rapid_parameters(self, cs: int, axis: str) -> tuple[Fraction, Fraction, Fraction]:
         """RAPID speed [axis units/ms], TA and TS [ms] of ``axis``: its motor's Ixx22, Ixx20, Ixx21."""
         motor = self.motor_on(cs, axis)
-        speed = Fraction(self.get_ivar(motor.number * 100 + 22)) / abs(motor.counts_per_unit)
+        jog = Fraction(self.get_ivar(motor.number * 100 + 22))
+        if jog == 0:
+            raise ConfigurationError(f"I{motor.number * 100 + 22} (Ixx22, jog speed) = 0: a RAPID move of axis {axis} "
+                                     "needs a speed > 0")
+        speed = jog / abs(motor.counts_per_unit)
         return (speed, Fraction(self.get_ivar(motor.number * 100 + 20)),
                 Fraction(self.get_ivar(motor.number * 100 + 21)))
 
@@ -300,7 +316,7 @@ class Pmac:
                 cs.ix89 = Fraction(checked)
         elif not ((family == "MOTOR" and suffix in self.MOTOR_MODELLED)
                   or (family == "GLOBAL" and suffix in self.GLOBAL_MODELLED)
-                  or (family == "CS" and suffix in (50, 90))):
+                  or (family == "CS" and suffix in (13, 50, 90))):
             self.sim.notes.not_modelled(self.device, f"I{number}", _shown(checked), where=where)
 
     def get_ivar(self, number: int) -> int | Fraction:
@@ -313,8 +329,10 @@ class Pmac:
         if family == "GLOBAL" and suffix == 10:
             return self.i10
         if family == "CS":
-            if suffix in (11, 12):
-                value, cycle = self._timers.get((unit, suffix), (0, self.cycle))
+            if suffix in (11, 12):  # count down one per servo cycle while the system is active (I68)
+                value, cycle = self._timers.get((unit, suffix), (0, self._cycle0 - 1))
+                if unit > int(self.get_ivar(68)) + 1:
+                    return value
                 return max(ivartable.REG_MIN, value - (self.cycle - cycle))
             cs = self.cs.get(unit)
             if cs is not None and suffix in self.CS_MODELLED:
@@ -383,7 +401,9 @@ class Pmac:
         """
         if self._started:
             raise ConfigurationError(f"{source}: load PMAC files before start()")
-        self.programs.load(text, source=source, path=path, defines=defines, search=search)
+        self.programs.load(text, source=source, path=path,
+                           defines=self.defines if defines is None else defines,
+                           search=[*search, *self.include_path])
 
     def command(self, text: str, *, source: str = "command") -> None:
         """Issue a line of online commands now (``&1 B1 R``, ``%50``, ``ENABLE PLC 1``)."""
@@ -464,6 +484,11 @@ class Pmac:
         if self._started:
             raise ConfigurationError("Pmac.start() called twice")
         self.table.bind(self.channels)
+        for entry in self.table.entries:
+            if isinstance(entry, OneOverTEntry) and entry.unconnected:
+                self.sim.notes.not_modelled(self.device, entry.origin or entry.label(),
+                                            f"1/T of channel {hexaddr(entry.channel_address, 6)}: no encoder is "
+                                            "connected, the entry reads 0")
         registers = self.time_base_registers()
         for cs in self.cs.values():
             if cs.ix93 not in registers:
@@ -488,7 +513,7 @@ class Pmac:
                                              "last frozen (the stale-capture hazard)")
         k0 = self.clock.first_cycle_at_or_after(self.sim.now)
         self._timers = {key: (value, k0 - 1 if cycle < k0 else cycle) for key, (value, cycle) in self._timers.items()}
-        self._cycle = k0 - 1
+        self._cycle, self._cycle0 = k0 - 1, k0
         self.programs.start()
         self._started = True
         self.sim.process(self.servo_cycle())

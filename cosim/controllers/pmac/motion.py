@@ -26,12 +26,12 @@ floating-point square root); one axis is always exact.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 
 from cosim import validate
-from cosim.controllers.pmac.paths import Arc, AxisPath, CirclePath, HermitePath, Path
+from cosim.controllers.pmac.paths import Arc, AxisPath, CirclePath, HermitePath, Path, SampledPath
 from cosim.controllers.pmac.profile import Profile
 from cosim.controllers.pmac.units import UNITS_PER_MS
 from cosim.errors import ConfigurationError
@@ -179,7 +179,20 @@ class Dwell:
         object.__setattr__(self, "ms", validate.positive(self.ms, "DWELL time", unit="ms", zero=True))
 
 
-Item = LinearMove | Move | RapidMove | PvtMove | CircleMove | Delay | Dwell
+@dataclass(frozen=True)
+class Segmented:
+    """A move whose kinematic motors follow ``inverse`` of the axis positions every ``segment_ms`` (Isx13).
+
+    ``inverse`` takes every axis position [axis units] and returns the kinematic motors' counts
+    (``#n`` keys); between segment points the motors move in straight lines.
+    """
+
+    item: LinearMove | Move | RapidMove | PvtMove | CircleMove
+    segment_ms: Fraction
+    inverse: Callable[[dict[str, Fraction]], dict[str, Fraction]]
+
+
+Item = LinearMove | Move | RapidMove | PvtMove | CircleMove | Delay | Dwell | Segmented
 
 
 @dataclass(frozen=True)
@@ -298,6 +311,8 @@ def compile_item(item: Item, current: dict[str, Fraction]) -> Segment:
         return Segment(False, t * UNITS_PER_MS, pvt)
     if isinstance(item, CircleMove):
         return compile_circle(item, current)
+    if isinstance(item, Segmented):
+        return compile_segmented(item, current)
     if isinstance(item, Delay):
         return Segment(False, Fraction(item.ms) * UNITS_PER_MS)
     if isinstance(item, Dwell):
@@ -361,6 +376,26 @@ def compile_circle(item: CircleMove, current: dict[str, Fraction]) -> Segment:
     paths += tuple(AxisPath(a, current[a], t, profile) for a, t in linear.items())
     current.update({first: end[0], second: end[1], **linear})
     return Segment(False, profile.total_ms * UNITS_PER_MS, paths + _followers(item.followers, profile, current))
+
+
+def compile_segmented(item: Segmented, current: dict[str, Fraction]) -> Segment:
+    """A move of a kinematic coordinate system: its axes as usual, its motors through ``inverse`` every segment."""
+    before = dict(current)
+    inner = compile_item(item.item, current)
+    total = inner.duration_units / UNITS_PER_MS
+    steps = max(1, math.ceil(total / item.segment_ms)) if total > 0 else 1
+    taus = [min(total, item.segment_ms * j) for j in range(1, steps + 1)]
+    axes = {a: p for a, p in before.items() if not a.startswith("#")}
+    samples: dict[str, list[tuple[Fraction, Fraction]]] = {}
+    for tau in taus:
+        positions = dict(axes)
+        positions.update({p.axis: Fraction(p.position(tau)) for p in inner.paths})
+        for motor, counts in item.inverse(positions).items():
+            samples.setdefault(motor, []).append((tau, counts))
+    motors = tuple(SampledPath(motor, before.get(motor, Fraction(0)), tuple(points))
+                   for motor, points in samples.items())
+    current.update({p.axis: p.target for p in motors})
+    return Segment(inner.real_time, inner.duration_units, inner.paths + motors)
 
 
 def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> list[Segment]:

@@ -160,4 +160,39 @@ class CirclePath:
         return self._at(numerator / denominator).as_integer_ratio()
 
 
-Path = AxisPath | HermitePath | CirclePath
+@dataclass(frozen=True)
+class SampledPath(_Polynomial):
+    """A kinematic motor of a segmented move: straight lines between its counts at the segment points.
+
+    ``points`` are ``(tau_ms, counts)`` in time order, the last at the end of the move.
+    """
+
+    axis: str = ""
+    start: Fraction = Fraction(0)
+    points: tuple[tuple[Fraction, Fraction], ...] = ()
+
+    @property
+    def target(self) -> Fraction:
+        return self.points[-1][1] if self.points else self.start
+
+    def position(self, tau_ms: Fraction) -> Fraction:
+        """Counts at ``tau_ms`` (exact)."""
+        before_tau, before = Fraction(0), self.start
+        for tau, value in self.points:
+            if tau_ms < tau:
+                return before + (value - before) * (tau_ms - before_tau) / (tau - before_tau)
+            before_tau, before = tau, value
+        return self.target
+
+    def pieces(self) -> list[Piece]:
+        out = [Piece(Fraction(0), True, (self.start,))]
+        before_tau, before = Fraction(0), self.start
+        for tau, value in self.points:
+            if tau > before_tau:
+                slope = (value - before) / (tau - before_tau)
+                out.append(Piece(tau, False, (before - slope * before_tau, slope)))
+            before_tau, before = tau, value
+        return [*out, Piece(None, False, (self.target,))]
+
+
+Path = AxisPath | HermitePath | CirclePath | SampledPath
