@@ -257,7 +257,7 @@ def _include(state: _State, argument: str, where: Pos, *, path: Path | None, dep
         raise where.error("#include needs a file name")
     if depth >= MAX_INCLUDE_DEPTH:
         raise where.error(f"#include nested deeper than {MAX_INCLUDE_DEPTH} files")
-    folders = ([path.parent] if path is not None else []) + state.search
+    folders = list(dict.fromkeys(([path.parent] if path is not None else []) + state.search))
     found = next((folder / name for folder in folders if (folder / name).is_file()), None)
     if found is None:
         looked = ", ".join(str(f) for f in folders) or "no folder (give the including file's path or a search path)"
