@@ -75,6 +75,7 @@ from cosim.controllers.pmac.nodes import (
 from cosim.controllers.pmac.nodes import Delay as DelayStmt
 from cosim.controllers.pmac.nodes import Dwell as DwellStmt
 from cosim.controllers.pmac.program import CODE_PROGRAMS, Code, Jump, JumpUnless, Sub
+from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from cosim.controllers.pmac.coord import CoordinateSystem
@@ -124,6 +125,10 @@ class Host(Protocol):
 
     def ivar(self, number: int) -> Value:
         """I``number`` now."""
+        ...
+
+    def fault(self, reason: str) -> None:
+        """A motion program stopped on an error: the job stops (state ERROR, the reason on the console)."""
         ...
 
 
@@ -383,9 +388,19 @@ class MotionProgram:
         self._spline: tuple[dict[str, Fraction], Stmt] | None = None  # a SPLINE1 point waiting for the next
 
     def calculate(self, cs: CoordinateSystem, t: int) -> None:
-        """Run statements until LOOKAHEAD moves are queued, a DWELL waits, a loop yields, or the end."""
+        """Run statements until LOOKAHEAD moves are queued, a DWELL waits, a loop yields, or the end.
+
+        An error stops the program and the job (its reason on the console), then the run.
+        """
         if self._yielded_at == t:  # a loop without moves made its pass of this servo cycle
             return
+        try:
+            self._calculate(cs, t)
+        except ConfigurationError as exc:
+            self.host.fault(str(exc))
+            raise
+
+    def _calculate(self, cs: CoordinateSystem, t: int) -> None:
         ctx = self.context
         queued = False
         for _step in range(MAX_STEPS):

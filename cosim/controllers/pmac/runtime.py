@@ -210,6 +210,10 @@ class Programs(Commands):
     def ivar(self, number: int) -> Fraction | int:
         return self.pmac.get_ivar(number)
 
+    def fault(self, reason: str) -> None:
+        """A motion program stopped on an error: the job stops with the reason."""
+        self.pmac.job.stop(JobState.ERROR, reason)
+
     def not_modelled(self, name: str, value: object, where: str) -> None:
         """List a setting or command that is accepted and kept but does not act."""
         self.pmac.sim.notes.not_modelled(self.pmac.device, name, value, where=where)
