@@ -227,3 +227,19 @@ def test_times_and_feedrates_of_the_modal_state(sim: Simulation) -> None:
     _run(sim, pmac, 1 + 23)  # 10 ms at 0.1 units/ms: 22.6 cycles
     assert pmac.coordinate_system(1).position("X") == 1
     assert Fraction(pmac.get_ivar(5190)) == 60000
+
+
+def test_the_job_is_done_when_every_started_motion_program_has_ended(sim: Simulation) -> None:
+    """Two programs from cycle 1 (442,708 ns); TM20 needs 46 cycles of I10 = 3,713,707 (46 x I10 >= 20 x 2^23).
+
+        pmac.job   0 (idle) | 1 (running) from 442,708 ns ....................| 2 (done) at cycle 46: 20,364,585 ns
+        PLC 1      scanning all along: PLCs are not the job
+    """
+    pmac = Pmac(sim)
+    pmac.load("&1 #1->1X\n&2 #2->1Y\nOPEN PROG 1 CLEAR TA0 TS0 TM10 X1 CLOSE\nOPEN PROG 2 CLEAR TA0 TS0 TM20 Y1 CLOSE\n"
+              "OPEN PLC 1 CLEAR P1=P1+1 CLOSE\nENABLE PLC 1\n", source="j.pmc")
+    pmac.command("&1 B1 R &2 B2 R")
+    _run(sim, pmac, 60)
+    times, values = sim.trace.edges("pmac.job")
+    assert [(int(t), int(v)) for t, v in zip(times, values, strict=True)] == [(0, 0), (442_708, 1), (20_364_585, 2)]
+    assert pmac.programs.memory.p[1] > 60
