@@ -134,9 +134,11 @@ class OneOverTEntry(Entry):
         self._channel_obj: EncoderChannel | None = None
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
-        """An encoder channel that no plant drives leaves the entry at 0 (listed by the machine as not modelled)."""
+        """Its encoder channel must exist -- unless the table lets it stay unconnected (then it reads 0)."""
         self._channel_obj = channels.get(self.channel_address)
         self.unconnected = self._channel_obj is None
+        if self.unconnected and not table.allow_unconnected(self):
+            self._channel(channels, self.channel_address, "channel address")  # raises, naming the channels
 
     def convert(self, t: int, table: ConversionTable) -> None:
         if self._channel_obj is not None:
@@ -396,6 +398,8 @@ class ConversionTable:
         self.base_address = base_address
         self.entries: list[Entry] = []
         self.cycle = -1
+        #: Let 1/T entries that no time-base entry reads stay without an encoder (a motor the model does not couple).
+        self.lenient = False
         self._by_address: dict[int, Entry] = {}
 
     def add(self, entry: Entry, *, at: int | None = None) -> Entry:
@@ -428,6 +432,11 @@ class ConversionTable:
     def time_base_entries(self) -> list[DifferentiatingEntry]:
         """Entries whose final result is a time-base value."""
         return [e for e in self.entries if isinstance(e, DifferentiatingEntry)]
+
+    def allow_unconnected(self, entry: Entry) -> bool:
+        """True if ``entry`` may have no encoder: the table is lenient and no time-base entry takes it as source."""
+        return self.lenient and not any(isinstance(e, TimeBaseEntry) and e.source_address == entry.address
+                                        for e in self.entries)
 
     def bind(self, channels: Mapping[int, EncoderChannel]) -> None:
         """Resolve every entry's sources; raises ConfigurationError naming the bad one."""

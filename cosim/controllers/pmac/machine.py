@@ -483,6 +483,7 @@ class Pmac:
         """Check the configuration and start the servo interrupt process."""
         if self._started:
             raise ConfigurationError("Pmac.start() called twice")
+        self.table.lenient = True  # motors' 1/T entries without a coupled encoder read 0 (listed below)
         self.table.bind(self.channels)
         for entry in self.table.entries:
             if isinstance(entry, OneOverTEntry) and entry.unconnected:
