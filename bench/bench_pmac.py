@@ -102,7 +102,8 @@ def main() -> None:
             shorts.append(short)
             longs.append(long)
             verdicts |= {verdict_short, verdict_long}
-        factors = [(args.long - args.short) / max(long - short, 1e-9) for short, long in zip(shorts, longs, strict=True)]
+        factors = [(args.long - args.short) / max(long - short, 1e-9)
+                   for short, long in zip(shorts, longs, strict=True)]
         print(f"  {label:15s} marginal real-time factor {spread(factors, '{:.1f}')}x   (CPU short "
               f"{spread(shorts)} s, long {spread(longs)} s; verdicts {', '.join(sorted(verdicts))})")
         if args.profile:

@@ -7,6 +7,7 @@ simulated time.
 
 from __future__ import annotations
 
+import itertools
 from fractions import Fraction
 
 import pytest
@@ -170,7 +171,7 @@ def test_circle_moves_in_the_normal_plane(sim: Simulation) -> None:
 
 
 def test_pvt_moves_are_cubics_between_positions_and_velocities(sim: Simulation) -> None:
-    """``PVT100`` then ``X100:1500``: from rest to 100 units at 1500 units/s in 100 ms -- at 50 ms the cubic is at 31.25."""
+    """``PVT100`` then ``X100:1500``: rest to 100 units at 1500 units/s in 100 ms; at 50 ms the cubic is at 31.25."""
     pmac = Pmac(sim)
     pmac.load("&1 #1->1X\nOPEN PROG 1 CLEAR\nPVT100\nX100:1500\nX200:0\nCLOSE\n", source="p.pmc")
     pmac.command("&1 B1 R")
@@ -194,8 +195,8 @@ def test_spline1_passes_through_its_points(sim: Simulation) -> None:
     for k in range(1, 400):
         sim.run(until=pmac.clock.t(k) + 1)
         seen.append(cs.position("X"))
-    assert seen[-1] == 40 and 10 in seen or any(abs(float(v) - 10) < 0.25 for v in seen)
-    assert all(b >= a for a, b in zip(seen, seen[1:], strict=False))  # monotonic through the points
+    assert (seen[-1] == 40 and 10 in seen) or any(abs(float(v) - 10) < 0.25 for v in seen)
+    assert all(b >= a for a, b in itertools.pairwise(seen))  # monotonic through the points
 
 
 def test_a_program_fault_stops_the_job_with_the_reason(sim: Simulation) -> None:

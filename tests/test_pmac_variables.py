@@ -11,8 +11,7 @@ from fractions import Fraction
 
 import pytest
 
-from cosim.controllers.pmac import Pmac
-from cosim.controllers.pmac import ivartable
+from cosim.controllers.pmac import Pmac, ivartable
 from cosim.controllers.pmac.mvars import q_offset
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation

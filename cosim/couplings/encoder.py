@@ -19,7 +19,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.couplings.roles import required, resolve
-from cosim.encoders import EncoderSample, extend_one_over_t
+from cosim.encoders import EncoderSample
 from cosim.errors import ConfigurationError
 from cosim.master import PlantLike
 from cosim.signals import Signal
@@ -98,7 +98,7 @@ class PlantEncoder:
         return EncoderSample(int(read(self._count)), last, prev, direction)
 
     def extended(self, t: int, fraction_bits: int) -> int:
-        """``extend_one_over_t(self.sample(t), t, fraction_bits)``, without building the sample (the servo cycle's path)."""
+        """``extend_one_over_t(self.sample(t), t, fraction_bits)`` without building the sample (the servo cycle's)."""
         sim = self.sim
         if t != sim.now:
             self.sample(t)  # raises: a plant is read now

@@ -148,7 +148,7 @@ _DOMAIN = {"SQRT": (">= 0", lambda x: x >= 0), "LN": ("> 0", lambda x: x > 0),
 def function(name: str, value: Value, *, radians: bool = False, q0: Value = 0) -> Value:
     """``ABS`` (magnitude), ``INT`` (floor), or a transcendental function (see the module doc)."""
     if name == "ABS":
-        return abs(value)
+        return -value if value < 0 else value
     if name == "INT":
         return math.floor(value)
     domain = _DOMAIN.get(name)

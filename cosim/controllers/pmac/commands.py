@@ -1,4 +1,4 @@
-"""What each online command and each non-motion program statement does (the part of :class:`~.runtime.Programs` that acts).
+"""What each online command and each non-motion program statement does (:class:`~.runtime.Programs`' acting part).
 
 Online commands run with a :class:`~.interpreter.Session` (the ``&n`` and ``#n`` they address): the
 host's for files and ``[[command]]`` lines, a PLC's own for its ``CMD"..."`` strings (``ADDRESS``
@@ -107,7 +107,7 @@ class Commands:
             raise pos.error(f"{value} is not a whole number")
         return int(value)
 
-    def execute(self, statements: Iterable[Stmt], session: Session) -> None:  # noqa: C901 - one case per command
+    def execute(self, statements: Iterable[Stmt], session: Session) -> None:
         """Run online commands with ``session``'s addressing."""
         pmac = self.pmac
         for stmt in statements:

@@ -379,7 +379,7 @@ class CoordinateSystem:
             last[1] = source
             self._src.set(source)
         slip = 0
-        if external and self.slip_units:
+        if upc is not None and self.slip_units:
             slip = abs(self.slip_units) // upc  # truncated toward zero, as int(slip_counts)
             if self.slip_units < 0:
                 slip = -slip

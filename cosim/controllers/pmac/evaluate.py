@@ -15,7 +15,7 @@ from typing import Protocol
 from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.bus import Value
 from cosim.controllers.pmac.mvars import Memory, check_number
-from cosim.controllers.pmac.nodes import Compare, Cond, Expr, Func, IndVar, Logic, Neg, Num, Ops, Pos, Var, located
+from cosim.controllers.pmac.nodes import Compare, Cond, Expr, Func, IndVar, Logic, Neg, Num, Pos, Var, located
 
 
 class Frame(Protocol):
@@ -36,7 +36,7 @@ def variable_number(var: Var | IndVar, frame: Frame) -> int:
     return check_number(var.kind, expression(var.index)(frame), var.pos)
 
 
-def expression(expr: Expr) -> Evaluator:  # noqa: C901 - one case per node
+def expression(expr: Expr) -> Evaluator:
     """A closure computing ``expr`` in a frame."""
     if isinstance(expr, Num):
         value = expr.value

@@ -459,8 +459,9 @@ class MotionProgram:
                 modes.move, modes.pvt_ms = "PVT", Fraction(expression(stmt.expr)(self.context))
                 return False
             if isinstance(stmt, Normal):
-                letter, value = max(stmt.vector, key=lambda item: abs(Fraction(expression(item[1])(self.context))))
-                number = Fraction(expression(value)(self.context))
+                letter, component = max(stmt.vector,
+                                        key=lambda item: abs(Fraction(expression(item[1])(self.context))))
+                number = Fraction(expression(component)(self.context))
                 modes.normal = (letter, 1 if number > 0 else -1)
                 return False
             if isinstance(stmt, MoveStmt):
@@ -521,11 +522,11 @@ class MotionProgram:
         scale_f = 1000 / time_units  # F per Isx90 ms -> per s
         item: Item
         if modes.move == "RAPID":
-            axes = {}
+            rapid: dict[str, RapidAxis] = {}
             for axis, target in targets.items():
                 speed, ta, ts = self.host.rapid_parameters(cs.number, axis, stmt.pos)
-                axes[axis] = RapidAxis(target, speed, ta, ts)
-            item = RapidMove(axes, followers)
+                rapid[axis] = RapidAxis(target, speed, ta, ts)
+            item = RapidMove(rapid, followers)
         elif modes.move in ("CIRCLE1", "CIRCLE2"):
             item = self.circle(stmt, targets, followers, scale_f)
         elif modes.move == "PVT":

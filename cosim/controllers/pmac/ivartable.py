@@ -328,7 +328,7 @@ def _servo_ic(ic: int, rest: int) -> Spec:
 
 def name(number: int) -> str:
     """``I5194 (Ix94, time-base slew limit)``: the variable and what it is, for messages."""
-    family, unit, suffix = split(number)
+    family, _unit, suffix = split(number)
     label = LABELS.get((family, suffix)) or LABELS.get((family, 0) if family == "ECT" else ("", 0))
     if label is None:
         item = spec(number)
@@ -341,8 +341,9 @@ def check(number: int, value: object, *, where: str = "") -> Value:
     item = spec(number)
     what = name(number)
     if item.kind in ("int", "address"):
-        checked: Value = validate.integer(value, what, low=item.low, high=item.high, where=where,
-                                          allowed=item.allowed())
+        low = None if item.low is None else int(item.low)
+        high = None if item.high is None else int(item.high)
+        checked: Value = validate.integer(value, what, low=low, high=high, where=where, allowed=item.allowed())
         return checked
     exact = validate.exact(value, what, where=where) if not isinstance(value, int | Fraction) else Fraction(value)
     if item.kind == "positive":  # "positive floating point": 0 and more (I100..131=0 is a setup file's first line)

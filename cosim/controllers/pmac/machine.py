@@ -23,8 +23,8 @@ issues a line of online commands (``&1 B1 R``); see :mod:`.runtime` for when pro
 from __future__ import annotations
 
 from collections.abc import Callable, Generator, Iterable
-from pathlib import Path
 from fractions import Fraction
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from cosim.controllers.pmac import ivartable
@@ -37,8 +37,8 @@ from cosim.controllers.pmac.ect import (
     TriggeredTimeBaseEntry,
 )
 from cosim.controllers.pmac.encoder import CAPTURE_OFFSET, EncoderChannel, EncoderSource
-from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.interpreter import KINEMATIC_AXES
+from cosim.controllers.pmac.motor import Motor
 from cosim.controllers.pmac.runtime import Programs
 from cosim.controllers.pmac.servo import PidLoop
 from cosim.controllers.pmac.setupfile import parse_setup

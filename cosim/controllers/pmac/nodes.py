@@ -224,7 +224,8 @@ class Begin(Stmt):
 
 @dataclass(frozen=True)
 class CsCommand(Stmt):
-    """A one-letter coordinate-system command: ``R`` run, ``S`` step, ``H`` hold, ``A`` abort, ``Q`` quit, ``K`` kill, ``/``, ``\\``."""
+    """A one-letter coordinate-system command: ``R`` run, ``S`` step, ``H`` hold, ``A`` abort, ``Q`` quit, ``K`` kill,
+    ``/``, ``\\``."""
 
     letter: str
 

@@ -75,7 +75,7 @@ def _read_file(path: Path) -> str:
 
 
 def strip_comments(text: str, *, in_block: bool = False) -> tuple[str, bool]:
-    """``text`` without ``;`` / ``//`` comments and ``/* */`` parts; returns it and whether a block comment stays open."""
+    """``text`` without ``;`` / ``//`` comments and ``/* */`` parts, and whether a block comment stays open."""
     out: list[str] = []
     i, n = 0, len(text)
     in_string = False

@@ -48,10 +48,11 @@ from collections.abc import Generator, Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from cosim import validate
 from cosim.controllers.pmac import ivartable
+from cosim.controllers.pmac.bus import Controller
 from cosim.controllers.pmac.commands import Commands
 from cosim.controllers.pmac.interpreter import (
     KINEMATIC_AXES,
@@ -63,7 +64,6 @@ from cosim.controllers.pmac.interpreter import (
     Session,
     run_to_end,
 )
-from cosim.controllers.pmac.bus import Controller
 from cosim.controllers.pmac.mvars import Memory
 from cosim.controllers.pmac.nodes import (
     Assign,
@@ -85,7 +85,6 @@ from cosim.controllers.pmac.program import CODE_PROGRAMS, Buffer, Code, compile_
 from cosim.controllers.pmac.syntax import parse_line
 from cosim.job import JobState
 from cosim.timebase import Priority
-
 
 #: Default background (PLC) scan period [ns]: a lightly loaded controller.
 PLC_SCAN_PERIOD_NS = 200_000

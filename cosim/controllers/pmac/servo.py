@@ -238,13 +238,13 @@ class PidLoop:
             self._x = [0.0 + a00 * x0 + a01 * x1 + b0 * error_counts, 0.0 + a10 * x0 + a11 * x1 + b1 * error_counts]
             return max(-DAC_MAX, min(DAC_MAX, round(u)))
         u = 0.0
-        for ci, xi in zip(d.c, x):
+        for ci, xi in zip(d.c, x, strict=True):
             u += ci * xi
         u += d.d * error_counts
         new = []
         for row, bi in self._rows:
             acc = 0.0
-            for aij, xj in zip(row, x):
+            for aij, xj in zip(row, x, strict=True):
                 acc += aij * xj
             new.append(acc + bi * error_counts)
         self._x = new

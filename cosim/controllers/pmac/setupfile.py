@@ -80,6 +80,7 @@ def parse_setup(text: str, *, source: str = "setup") -> tuple[Assignment, ...]:
                             "I10=3713707 or I8010=$978008)")
         number = item.var.number
         exact = value.numerator if value.denominator == 1 else value
-        assignments.append(Assignment(number, ivartable.check(number, exact, where=str(item.pos)), item.pos.line, source,
+        checked = ivartable.check(number, exact, where=str(item.pos))
+        assignments.append(Assignment(number, checked, item.pos.line, source,
                                       item.pos.column))
     return tuple(assignments)

@@ -228,7 +228,7 @@ class _Converter:
         return out
 
     # -- statements ------------------------------------------------------------------------
-    def statement(self, node: Tree, *, last: bool = True) -> Stmt | list[Stmt]:  # noqa: C901 - one dispatch
+    def statement(self, node: Tree, *, last: bool = True) -> Stmt | list[Stmt]:
         kind = str(node.data)
         kids = node.children
         pos = self.pos(node)
@@ -255,18 +255,20 @@ class _Converter:
         if kind == "clear_buffer":
             return Other(pos, "CLEAR", f"CLEAR {kids[1]}") if kids[1] is not None else Clear(pos)
         if kind == "p0_assign":
-            value = Num(arith.literal(str(kids[1]), where=str(pos)))
-            return Assign(pos, Var("P", 0, pos), Neg(value) if kids[0] is not None and str(kids[0]) == "-" else value)
+            literal: Expr = Num(arith.literal(str(kids[1]), where=str(pos)))
+            if kids[0] is not None and str(kids[0]) == "-":
+                literal = Neg(literal)
+            return Assign(pos, Var("P", 0, pos), literal)
         if kind == "begin":
             return Begin(pos, self.numbered(kids[0], "program number (Bn)", PROG_RANGE, pos))
         if kind == "cs_command":
             return CsCommand(pos, str(kids[0]).upper())
         if kind == "percent":
-            value = self.data(kids[1])
-            number = constant(value)
+            override = self.data(kids[1])
+            number = constant(override)
             if number is not None and number < 0:
                 raise pos.error(f"%{number}: the feedrate override is not allowed below 0")
-            return Percent(pos, value)
+            return Percent(pos, override)
         if kind in ("assign", "range_assign"):
             return self.assign(pos, kind, kids)
         if kind == "query":
@@ -277,7 +279,7 @@ class _Converter:
         if kind == "mdef":
             return self.mdef(pos, kids)
         if kind == "mdef_query":
-            return MDefQuery(pos, self.var(kids[0]).number)
+            return MDefQuery(pos, self.number(kids[0]))
         if kind == "plc_control":
             return self.plc_control(pos, kids)
         if kind == "jog":
@@ -331,6 +333,7 @@ class _Converter:
         if kind == "send":
             port = str(kids[0]).upper()[4:] or "S"
             token = kids[1]
+            assert isinstance(token, Token)
             if token.type == "STRING":
                 return Send(pos, port, str(token)[1:-1])
             return Send(pos, port, "", self.control(token))
@@ -351,7 +354,7 @@ class _Converter:
         if kind == "code_call":
             return CodeCall(pos, str(kids[0]).upper(), self.data(kids[1]))
         if kind == "mcode":
-            return CodeCall(pos, "M", Num(self.var(kids[0]).number))
+            return CodeCall(pos, "M", Num(self.number(kids[0])))
         raise pos.error(f"statement {kind!r} is not supported")  # the grammar has no other
 
     def numbered(self, node: Tree, name: str, bounds: tuple[int, int], pos: Pos) -> Expr:
@@ -457,10 +460,10 @@ class _Converter:
     def mdef(self, pos: Pos, kids: list) -> MDefine:
         head = kids[0]
         if isinstance(head, Tree):  # Mfirst..last
-            first = self.var(head.children[0]).number
+            first = self.number(head.children[0])
             last = _range(_int(head.children[1]), "last M-variable of the range", (first, VAR_LAST), pos)
         else:
-            first = self.var(head).number
+            first = self.number(head)
             last = None
         return MDefine(pos, first, self.mtarget(pos, first, kids[1]), last)
 
@@ -485,7 +488,7 @@ class _Converter:
         signed = fmt is not None and str(fmt).upper() == "S"
         return MWord(str(space)[0].upper(), address_value, offset_value, width_value, signed)
 
-    def address(self, pos: Pos, number: int, token: Token) -> int:
+    def address(self, pos: Pos, number: int, token: object) -> int:
         text = str(token)
         value = int(text[1:], 16) if text.startswith("$") else int(text)
         if not 0 <= value <= ADDRESS_LAST:
@@ -506,7 +509,7 @@ class _Converter:
         compiled = str(kids[1]).upper() == "PLCC"
         return PlcControl(pos, verb, compiled, self.plc_numbers(kids[2], "PLC number", PLC_RANGE, pos))
 
-    def control(self, token: Token) -> str:
+    def control(self, token: object) -> str:
         text = str(token)
         return text[1].upper() if text.startswith("^") else _CONTROL_NAMES.get(text, "?")
 
@@ -572,7 +575,8 @@ class _Converter:
                     index += 2
         return Call(pos, program, label, tuple(args))
 
-    def cmd(self, pos: Pos, token: Token) -> Cmd:
+    def cmd(self, pos: Pos, token: object) -> Cmd:
+        assert isinstance(token, Token)
         if token.type == "CTRL":
             return Cmd(pos, str(token), (), self.control(token))
         text = str(token)[1:-1]
@@ -584,6 +588,12 @@ class _Converter:
         return Cmd(pos, text, tuple(commands))
 
     # -- expressions -----------------------------------------------------------------------
+    def number(self, node: Tree | Token) -> int:
+        """The number of a directly named variable (``M103``), checked."""
+        var = self.var(node)
+        assert isinstance(var, Var)
+        return var.number
+
     def var(self, node: Tree | Token) -> Target:
         if isinstance(node, Tree) and len(node.children) == 2:  # P(expr)
             token = node.children[0]
