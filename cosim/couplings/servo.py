@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from cosim.controllers.pmac.motor import Motor
-from cosim.controllers.pmac.servo import DAC_MAX, DAC_VOLTS_PER_BIT, MotorModel, PidDesign
+from cosim.controllers.pmac.servo import DAC_MAX, DAC_VOLTS_PER_BIT, MotorModel, PidDesign, cached_design
 from cosim.couplings.encoder import ROLES as ENCODER_ROLES
 from cosim.couplings.encoder import PlantEncoder
 from cosim.couplings.roles import required, resolve
@@ -109,8 +109,16 @@ def full_model_margins(design: PidDesign, params: ServoParameters, *,
 
     The plant is ``cosim.plants.servo.linear_model(params, output="angle")`` (with the
     inductance) in counts per DAC bit, sampled with a zero-order hold at the servo period and
-    closed with the designed discrete controller.
+    closed with the designed discrete controller. Kept on disk by its inputs, as the design is
+    (:func:`cosim.controllers.pmac.servo.cached_design`).
     """
+    inputs = {"design": dataclasses.asdict(design), "params": dataclasses.asdict(params),
+              "volts_per_bit": float(volts_per_bit)}
+    value = cached_design("margins", inputs, lambda: _margins(design, params, volts_per_bit))
+    return value["gain_margin_db"], value["phase_margin_deg"], value["radius"]
+
+
+def _margins(design: PidDesign, params: ServoParameters, volts_per_bit: float | Fraction) -> dict[str, float]:
     import control  # python-control only where a loop is checked (see cosim.controllers.pmac.servo)
 
     scale = params.counts_per_rev / (2 * math.pi) * float(volts_per_bit)
@@ -121,7 +129,7 @@ def full_model_margins(design: PidDesign, params: ServoParameters, *,
     gm, pm, *_rest = control.stability_margins(loop, method="frd")
     radius = float(np.max(np.abs(control.poles(control.feedback(loop, 1)))))
     gm_db = float(20 * math.log10(gm)) if np.isfinite(gm) and gm > 0 else math.inf
-    return gm_db, float(pm), radius
+    return {"gain_margin_db": gm_db, "phase_margin_deg": float(pm), "radius": radius}
 
 
 def full_scale_speed_counts_per_ms(params: ServoParameters, *,
