@@ -64,6 +64,7 @@ class PlantEncoder:
         self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
         resolution = self.sim.timebase.resolution_s  # ticks = seconds * den / num
         self._per_s = (resolution.denominator, resolution.numerator)
+        self._last_ceil: tuple[float, int] = (float("nan"), 0)
 
     def _ticks_ceil(self, t_s: float) -> int:
         """:meth:`cosim.timebase.TimeBase.ticks_from_seconds_ceil` in integers (the same rule, the same tick).
@@ -72,15 +73,17 @@ class PlantEncoder:
         ``A / B``; within 10^-6 tick of a whole tick (float noise of a time that was on one) it is
         that tick (the nearest, halves to even, as ``round`` does), else the next tick up.
         """
+        if t_s == self._last_ceil[0]:  # the same edge as last time (a slow or resting encoder)
+            return self._last_ceil[1]
         n, d = t_s.as_integer_ratio()
         den, num = self._per_s
         a, b = n * den, d * num
         q, r = divmod(a, b)
         twice = 2 * r
         nearest = q + 1 if twice > b or (twice == b and q & 1) else q
-        if 1_000_000 * abs(a - nearest * b) <= b:
-            return nearest
-        return q + 1 if r else q
+        ticks = nearest if 1_000_000 * abs(a - nearest * b) <= b else (q + 1 if r else q)
+        self._last_ceil = (t_s, ticks)
+        return ticks
 
     def _edge(self, t_s: float) -> int | None:
         t = self._ticks_ceil(t_s)

@@ -40,12 +40,19 @@ from cosim.validate import integer
 if TYPE_CHECKING:
     from cosim.controllers.pmac.ports import ServoPort
 
+_DAC_NUM, _DAC_DEN = DAC_VOLTS_PER_BIT.numerator, DAC_VOLTS_PER_BIT.denominator
 ROLES: dict[str, str | None] = {"command": "u_cmd", **ENCODER_ROLES}
 """Roles of the servo coupling and the Servo FMU's variables that play them."""
 
 
 def dac_volts(dac_bits: float) -> float:
-    """DAC bits to the command voltage [V] (``DAC_VOLTS_PER_BIT`` per bit)."""
+    """DAC bits to the command voltage [V] (``DAC_VOLTS_PER_BIT`` per bit).
+
+    For whole bits (what the DAC gives) in integers: ``bits * 10 / 32768`` is the correctly rounded
+    float of the exact product, as ``float(bits * DAC_VOLTS_PER_BIT)``.
+    """
+    if type(dac_bits) is int:
+        return dac_bits * _DAC_NUM / _DAC_DEN
     return float(dac_bits * DAC_VOLTS_PER_BIT)
 
 

@@ -45,6 +45,7 @@ from cosim.controllers.pmac.setupfile import parse_setup
 from cosim.controllers.pmac.units import I10_DEFAULT, REG_MASK, Reg, ServoClock, hexaddr
 from cosim.errors import ConfigurationError
 from cosim.job import Job
+from cosim.kernel import At
 from cosim.signals import PulseTrain, Signal
 from cosim.timebase import Priority
 
@@ -360,6 +361,7 @@ class Pmac:
             entry.write_first_line(value, where=where, t=self.sim.now)
             if self._method is not None and entry is self._trigger_entry():
                 self._method.set(entry.method)
+            self.programs.wake()
         elif isinstance(entry, DifferentiatingEntry) and offset == 1:
             entry.set_scale_factor(value, where=where)
         else:
@@ -523,17 +525,23 @@ class Pmac:
         """The servo interrupt: table, coordinate systems, motors, every ``t_k``."""
         k = k0 = self.clock.first_cycle_at_or_after(self.sim.now)
         trigger = self._trigger_entry()
+        env, table, clock = self.sim.env, self.table, self.clock
+        master = self._master if self._master_pos is not None else None
+        method = trigger.method if trigger is not None else None
         while True:
-            t = self.clock.t(k)
-            yield self.sim.at(t, Priority.SERVO)
+            t = clock.t(k)
+            yield At(env, t, Priority.SERVO)  # t >= now: the clock's instants only grow
             self._cycle = k
-            self.table.run(t, k)
-            if self._master is not None and self._master_pos is not None:
-                entry, scale = self._master
-                self._master_pos.set(entry.position / scale)
+            table.run(t, k)
+            if master is not None:
+                entry, scale = master
+                self._master_pos.set(entry.position / scale)  # type: ignore[union-attr]
             if trigger is not None and self._method is not None and self._time_zero is not None:
-                if self._method.set(trigger.method):
-                    self.programs.wake()  # the firmware changed the method digit: PLCs may read it
+                if trigger.method != self._method.value:  # also written by the host between cycles
+                    self._method.set(trigger.method)
+                if trigger.method != method:
+                    method = trigger.method
+                    self.programs.wake()  # the method digit changed: PLCs may read it
                 if trigger.starts and trigger.starts[-1].cycle == k:
                     self._time_zero.set(trigger.starts[-1].time_zero_pos256 / 256)
                     if self._stale is not None:
