@@ -132,7 +132,7 @@ GLOBAL: dict[int, Spec] = {
     2: _i("I2", "control panel port activation", 0, 3, 0, source="word"),
     3: _i("I3", "I/O handshake control", 0, 3, 1, source="SRM"),
     4: _i("I4", "communications integrity mode", 0, 3, 0, source="word"),
-    5: _i("I5", "PLC programs on/off", 0, 3, 1, source="word"),
+    5: _i("I5", "PLC program control", 0, 3, 1),
     6: _i("I6", "error reporting mode", 0, 3, 1, source="word"),
     7: _i("I7", "phase cycle extension", 0, 15, 0, source="word"),
     8: _i("I8", "real-time interrupt period", 0, 255, 2, "servo cycles - 1", source="word"),
@@ -314,16 +314,24 @@ def spec(number: int) -> Spec:
     return Spec(f"I{number}", "not used by the Turbo PMAC", -BIG, BIG, 0, "", "float", "word")
 
 
+#: Servo IC channel variables I7mn0..I7mn9: name, range, default (read in the reference for 0, 1, 3, 5; 2 from
+#: the project's controller facts, TSRM p. 222).
+SERVO_CHANNEL: dict[int, tuple[str, int, int, int, str]] = {
+    0: ("encoder/timer decode control", 0, 15, 7, "SRM"), 1: ("encoder filter disable", 0, 1, 0, "SRM"),
+    2: ("capture control", 0, 15, 1, "SRM"), 3: ("capture flag select control", 0, 3, 0, "SRM"),
+    4: ("encoder gated index select", 0, 1, 0, "word"), 5: ("encoder index gate state/demux control", 0, 3, 0, "SRM"),
+    6: ("output mode control", 0, 3, 0, "word"), 7: ("output invert control", 0, 3, 0, "word"),
+    8: ("PFM direction signal invert control", 0, 1, 0, "word"), 9: ("hardware 1/T control", 0, 1, 0, "word"),
+}
+
+
 def _servo_ic(ic: int, rest: int) -> Spec:
     channel, item = divmod(rest % 50, 10)
     family = f"I7m{'n' if channel else '0'}{item}"
     if channel == 0:
         return _word(family, f"Servo IC {ic} multi-channel I-variable")
-    names = {0: "encoder/timer decode control", 1: "position compare channel select", 2: "capture control",
-             3: "capture flag select control", 4: "encoder gated index select", 5: "encoder index gate state",
-             6: "output mode control", 7: "output invert control", 8: "PFM direction signal invert",
-             9: "hardware 1/T control"}
-    return _word(family, f"Servo IC {ic} channel {channel} {names[item]}")
+    name, low, high, default, source = SERVO_CHANNEL[item]
+    return _i(family, f"Servo IC {ic} channel {channel} {name}", low, high, default, source=source)
 
 
 def name(number: int) -> str:
