@@ -63,7 +63,6 @@ from cosim.controllers.pmac.nodes import (
     Send,
     Stmt,
     Undefine,
-    Var,
     located,
 )
 
@@ -287,4 +286,4 @@ def _written(stmt: Stmt) -> str:
     return "O"
 
 
-__all__ = ["Commands", "Var"]
+__all__ = ["Commands"]

@@ -15,7 +15,7 @@ from typing import Protocol
 from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.bus import Value
 from cosim.controllers.pmac.mvars import Memory, check_number
-from cosim.controllers.pmac.nodes import Compare, Cond, Expr, Func, IndVar, Logic, Neg, Num, Pos, Var, located
+from cosim.controllers.pmac.nodes import Compare, Cond, Expr, Func, IndVar, Neg, Num, Var, located
 
 
 class Frame(Protocol):
@@ -109,9 +109,4 @@ def condition(cond: Cond) -> Test:
     return lambda frame: any(test(frame) for test in items)
 
 
-def place(pos: Pos) -> str:
-    """``file:line:column`` as messages prefix it."""
-    return str(pos)
-
-
-__all__ = ["Evaluator", "Frame", "Logic", "Test", "condition", "expression", "variable_number"]
+__all__ = ["Evaluator", "Frame", "Test", "condition", "expression", "variable_number"]

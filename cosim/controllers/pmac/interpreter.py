@@ -45,7 +45,6 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import TYPE_CHECKING, Any, Protocol
 
-from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.bus import Value
 from cosim.controllers.pmac.evaluate import Evaluator, condition, expression
 from cosim.controllers.pmac.motion import CircleMove, Delay, Dwell, Item, Move, PvtMove, RapidAxis, RapidMove, Segmented
@@ -604,11 +603,6 @@ class MotionProgram:
             self._spline = None
             self._queue_spline(cs, point, None)
             self.modes.velocities.clear()
-
-
-def fit_value(value: Value) -> Value:
-    """A computed kinematic result fitted to a 48-bit word."""
-    return arith.fit(value)
 
 
 __all__ = ["KINEMATIC_AXES", "LOOKAHEAD", "MAX_CALL_DEPTH", "MAX_STEPS", "Compiled", "Context", "Evaluator", "Host",

@@ -16,8 +16,6 @@ from fractions import Fraction
 from cosim.controllers.pmac import arith
 from cosim.controllers.pmac.source import Pos, located
 
-__all__ = ["Pos", "located"]
-
 Value = int | Fraction
 
 

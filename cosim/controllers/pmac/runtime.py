@@ -72,7 +72,6 @@ from cosim.controllers.pmac.nodes import (
     Cmd,
     CodeCall,
     CsSelect,
-    MDefine,
     MoveStmt,
     PlcControl,
     Pos,
@@ -464,4 +463,4 @@ class Programs(Commands):
             self.pmac.sim.process(self.background())
 
 
-__all__ = ["BACKGROUND", "PLC_SCAN_PERIOD_NS", "CommandLine", "Context", "MDefine", "Programs", "Session"]
+__all__ = ["BACKGROUND", "PLC_SCAN_PERIOD_NS", "CommandLine", "Context", "Programs", "Session"]
