@@ -117,6 +117,8 @@ def test_i_variable_constants_are_checked_where_they_are_written() -> None:
         ("OPEN PROG 1 CLEAR X10", r"^bad.pmc:1:1: OPEN PROG 1 has no CLOSE \(the file ends inside the buffer\)$"),
         ("OPEN PLC 1 CLEAR P1=1 CLOSE X10", r"^bad.pmc:1:29: 'X10' is a program statement: write it between OPEN"),
         ("OPEN PROG 1\nCLOSE X10", r"^bad.pmc:2:7: 'X10' is a program statement: write it between OPEN PROG n"),
+        # fuzzing found it: a rotary buffer takes no number, what follows is its content
+        ("OPEN ROTARY 8388607", r"^bad.pmc:1:13: '8388607' is an online command, not allowed inside a program"),
         ("CLEAR", r"^bad.pmc:1:1: CLEAR outside a buffer"),
         ("OPEN PLC 1\nIF (P1=1)\nP2=1\nCLOSE", r"^bad.pmc:2:1: IF without ENDIF in PLC 1$"),
         ("OPEN PLC 1\nWHILE (P1<1)\nENDIF\nCLOSE",

@@ -76,8 +76,8 @@ MAX_BLOCKS = 32
 #: Label of PROG 1000..1003 that a G, M, T or D code calls: N(value * 1000).
 CODE_PROGRAMS = {"G": 1000, "M": 1001, "T": 1002, "D": 1003}
 
-_OPEN_HEAD = re.compile(r"\s*OPEN\s*(PROGRAM|PROG|PLCC|PLC|FORWARD|FWD|INVERSE|INV|(?:BINARY\s+)?ROTARY)"
-                        r"(?![A-Z])\s*(\d+)?\s*(CLEAR(?![A-Z]))?", re.IGNORECASE)
+_OPEN_HEAD = re.compile(r"\s*OPEN\s*(?:(?:PROGRAM|PROG|PLCC|PLC|FORWARD|FWD|INVERSE|INV)(?![A-Z])\s*(?:\d+)?"
+                        r"|(?:BINARY\s+)?ROTARY(?![A-Z]))\s*(?:CLEAR(?![A-Z]))?", re.IGNORECASE)
 _CLOSE_WORD = re.compile(r"(?<![A-Z0-9_])CLOSE(?![A-Z0-9_])", re.IGNORECASE)
 
 
@@ -233,8 +233,10 @@ class _Reader:
         if head is not None:  # OPEN ... [CLEAR] then, maybe, the buffer's statements on the same line
             statements = parse_line(text[:head.end()], context="online", source=line.source, line=line.line,
                                     column=column)
-            (opened,) = statements
-            assert isinstance(opened, OpenBuffer)
+            opened = statements[0] if statements else None
+            if len(statements) != 1 or not isinstance(opened, OpenBuffer):  # the grammar read it otherwise
+                raise (statements[-1].pos if statements else line.pos(column)).error(
+                    f"{text[:head.end()].strip()!r} is not an OPEN of a buffer")
             self.current = _Open(opened, opened.clear)
             rest = text[head.end():]
             if rest.strip():
