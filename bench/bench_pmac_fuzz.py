@@ -1,8 +1,9 @@
 """Fuzz the PMAC text readers for a while: generated and mutated text may only raise the project's errors.
 
 Every input (see :mod:`cosim.testing.pmac_text`: token soups with every kind of line end, and
-mutations of real setup, motion and PLC files) goes to ``parse_setup``, ``parse_text`` and the
-online command parser; one in ``--run-every`` is also loaded into a controller, started with
+mutations of real setup, motion and PLC files and of a project's files with preprocessor
+directives) goes to the download preprocessor, ``parse_setup``, ``parse_text`` and the online
+command parser; one in ``--run-every`` is also loaded into a controller, started with
 ``&1 B1 R`` and run for 3 ms of simulated time. Prints the inputs per reader, the crashes (the
 first input of each kind is written to ``--out``) and the rate. Run::
 
@@ -38,7 +39,7 @@ def main() -> None:
         for _ in range(200):
             text = draw(rng)
             n += 1
-            names = [*READERS] if n % args.run_every == 0 else ["parse_setup", "parse_text", "command"]
+            names = [*READERS] if n % args.run_every == 0 else ["preprocess", "parse_setup", "parse_text", "command"]
             for name in names:
                 counts[name] += 1
                 try:

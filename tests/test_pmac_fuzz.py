@@ -37,4 +37,4 @@ def test_edited_pmac_files_raise_only_our_errors(text: str) -> None:
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(st.text(max_size=200))
 def test_any_text_at_all(text: str) -> None:
-    assert feed(text, readers=("parse_setup", "parse_text", "command")) is None
+    assert feed(text, readers=("preprocess", "parse_setup", "parse_text", "command")) is None

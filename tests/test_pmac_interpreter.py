@@ -94,8 +94,8 @@ def test_statements_between_moves_run_one_move_early_and_dwell_stops_the_lookahe
     pmac = _pmac(sim, "&1 #1->1X", "OPEN PROG 1 CLEAR\nLINEAR ABS TA0 TS0 F1000\nX1 P1=1 X2 P2=1 X3 DWELL0 P3=1 X4\n"
                                    "CLOSE")
     p = pmac.programs.memory.p
-    rows = _run(sim, pmac, 18, lambda k, t: (pmac.coordinate_system(1).position("X"), p.get(1, 0), p.get(2, 0),
-                                              p.get(3, 0)))
+    rows = _run(sim, pmac, 18, lambda k, t: (pmac.coordinate_system(1).position("X"), p[1], p[2],
+                                              p[3]))
     x = [r[0] for r in rows]
     assert x == [0, *(Fraction(k, 4) for k in range(1, 13)), *(3 + Fraction(k, 4) for k in range(1, 5)), 4]
     assert [r[1] for r in rows].index(1) == 1
@@ -106,7 +106,7 @@ def test_statements_between_moves_run_one_move_early_and_dwell_stops_the_lookahe
 def test_a_loop_without_moves_makes_one_pass_per_servo_cycle(sim: Simulation) -> None:
     pmac = _pmac(sim, "&1 #1->1X", "OPEN PROG 1 CLEAR\nLINEAR ABS TA0 TS0 F1000\nP1=0\nWHILE (P1 < 5)\n P1=P1+1\n"
                                    "ENDWHILE\nX1\nCLOSE")
-    rows = _run(sim, pmac, 10, lambda k, t: (pmac.programs.memory.p.get(1, 0), pmac.coordinate_system(1).position("X")))
+    rows = _run(sim, pmac, 10, lambda k, t: (pmac.programs.memory.p[1], pmac.coordinate_system(1).position("X")))
     assert [r[0] for r in rows] == [0, 1, 2, 3, 4, 5, 5, 5, 5, 5]
     assert [r[1] for r in rows] == [0] * 6 + [Fraction(1, 4), Fraction(1, 2), Fraction(3, 4), 1]
 

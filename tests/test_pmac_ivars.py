@@ -7,7 +7,7 @@ from fractions import Fraction
 import pytest
 
 from cosim.controllers.pmac.ect import RUNNING, TriggeredTimeBaseEntry
-from cosim.controllers.pmac.ivars import cs_ivar
+from cosim.controllers.pmac.ivartable import split
 from cosim.controllers.pmac.machine import Pmac
 from cosim.controllers.pmac.setupfile import Assignment, parse_setup
 from cosim.errors import ConfigurationError
@@ -36,10 +36,15 @@ def test_parse_hex_decimal_address_of_and_comments() -> None:
 
 
 def test_cs_numbering_pmac_and_turbo() -> None:
-    assert cs_ivar(193) == (1, 93) and cs_ivar(894) == (8, 94)
-    assert cs_ivar(5193) == (1, 93) and cs_ivar(5894) == (8, 94)
-    assert cs_ivar(93) is None and cs_ivar(995) is None and cs_ivar(196) is None and cs_ivar(192) is None
-    assert cs_ivar(195) == (1, 95) and cs_ivar(5887) == (8, 87)
+    """Turbo numbering Isx (I5100..I6699, 16 systems); the non-Turbo Ix93/Ix94 of CS 1..8 stay aliases.
+
+    The Turbo PMAC has no motor variables Ixx93 and Ixx94, so I193..I894 mean nothing else; I195 is
+    motor 1's Ixx95 (power-on servo position format) on the Turbo PMAC.
+    """
+    assert split(193) == ("CS", 1, 93) and split(894) == ("CS", 8, 94)
+    assert split(5193) == ("CS", 1, 93) and split(5894) == ("CS", 8, 94) and split(6694) == ("CS", 16, 94)
+    assert split(93) == ("GLOBAL", 0, 93) and split(995) == ("MOTOR", 9, 95) and split(196) == ("MOTOR", 1, 96)
+    assert split(195) == ("MOTOR", 1, 95) and split(5887) == ("CS", 8, 87) and split(7013) == ("SERVO_IC", 0, 13)
 
 
 VALUE = r"is not a value \(write a number: decimal, \$hex or @In; a variable; or an expression of them\)$"
@@ -48,9 +53,11 @@ VALUE = r"is not a value \(write a number: decimal, \$hex or @In; a variable; or
 @pytest.mark.parametrize(
     ("text", "message"),
     [
-        ("I10=3713707\nI130=2000",
-         r"^cell.pmc:2:1: I130 is not an I-variable this model knows \(known: I10; Ix87..Ix89 and Ix93..Ix95"),
-        ("I7000=1", r"^cell.pmc:1:1: I7000 is not an I-variable"),
+        ("I10=3713707\nI130=8388608",
+         r"^cell.pmc:2:1: I130 \(Ixx30, PID proportional gain\) = 8388608 is not allowed \(allowed: integers "
+         r"-8388608..8388607\)$"),
+        ("I7000=$1000000", r"^cell.pmc:1:1: I7000 \(I7m00, Servo IC 0 multi-channel I-variable\) = 16777216 is not "
+                           r"allowed"),
         ("I194=8388608", r"^cell.pmc:1:1: I194 \(Ix94, time-base slew limit\) = 8388608 is not allowed "
                          r"\(allowed: integers 0..8388607"),
         ("\n\nI5194=-1", r"^cell.pmc:3:1: I5194 \(Ix94, time-base slew limit\) = -1 is not allowed"),

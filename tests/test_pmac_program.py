@@ -17,10 +17,7 @@ from cosim.controllers.pmac.nodes import (
     Num,
 )
 from cosim.controllers.pmac.program import MAX_BLOCKS, Jump, JumpUnless, MoveStmt, Sub, parse_text
-from cosim.controllers.pmac.statements import (
-    MAX_PARENS,
-    parse_line,
-)
+from cosim.controllers.pmac.syntax import MAX_PARENS, parse_line
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 from cosim.plants.analytic import IdealConveyor
@@ -104,8 +101,9 @@ def test_i_variable_constants_are_checked_where_they_are_written() -> None:
         ("OPEN PLC 1\nP1=M9000\nCLOSE", r"^bad.pmc:2:4: M-variable number = 9000 is not allowed \(allowed: 0..8191\)$"),
         ("OPEN PLC 1\nI5194=9000000\nCLOSE",
          r"^bad.pmc:2:1: I5194 \(Ix94, time-base slew limit\) = 9000000 is not allowed \(allowed: integers 0..8388607"),
-        ("OPEN PLC 1\nIF (I130=0) P1=1\nCLOSE", r"^bad.pmc:2:5: I130 is not an I-variable this model knows"),
-        ("&9", r"^bad.pmc:1:1: coordinate system &n = 9 is not allowed \(allowed: 1..8\)$"),
+        ("OPEN PLC 1\nI130=9000000\nCLOSE", r"^bad.pmc:2:1: I130 \(Ixx30, PID proportional gain\) = 9000000 is not "
+                                           r"allowed \(allowed: integers -8388608..8388607\)$"),
+        ("&17", r"^bad.pmc:1:1: coordinate system &n = 17 is not allowed \(allowed: 1..16\)$"),
         ("#33->X", r"^bad.pmc:1:1: motor #n = 33 is not allowed \(allowed: 1..32\)$"),
         ("OPEN PLC 32\nCLOSE", r"^bad.pmc:1:1: PLC number = 32 is not allowed \(allowed: 0..31\)$"),
         ("M1->X:$078000,20,8", r"^bad.pmc:1:1: M1 width = 8 is not allowed \(allowed: 1..4: offset \+ width <= 24"),
@@ -115,10 +113,12 @@ def test_i_variable_constants_are_checked_where_they_are_written() -> None:
          r"^bad.pmc:1:4: \$FFFFFFFFFFFF = 2.81475e\+14 is not allowed \(allowed: \|value\| < 2\^47"),
         # CLOSE missing, blocks, labels
         ("OPEN PROG 3 CLEAR\nX10\n", r"^bad.pmc:1:1: OPEN PROG 3 has no CLOSE \(the file ends inside the buffer\)$"),
-        ("OPEN PROG 1 CLEAR X10",
-         r"^bad.pmc:1:19: nothing may follow OPEN PROG n \[CLEAR\] \(or OPEN PLC n \[CLEAR\]\) on its line"),
-        ("OPEN PLC 1 CLEAR P1=1", r"^bad.pmc:1:18: nothing may follow OPEN PLC 1 CLEAR on its line: the buffer's"),
-        ("OPEN PROG 1\nCLOSE X10", r"^bad.pmc:2:7: CLOSE must end its line$"),
+        # a buffer on one line needs its CLOSE there or later; after CLOSE the line is online commands again
+        ("OPEN PROG 1 CLEAR X10", r"^bad.pmc:1:1: OPEN PROG 1 has no CLOSE \(the file ends inside the buffer\)$"),
+        ("OPEN PLC 1 CLEAR P1=1 CLOSE X10", r"^bad.pmc:1:29: 'X10' is a program statement: write it between OPEN"),
+        ("OPEN PROG 1\nCLOSE X10", r"^bad.pmc:2:7: 'X10' is a program statement: write it between OPEN PROG n"),
+        # fuzzing found it: a rotary buffer takes no number, what follows is its content
+        ("OPEN ROTARY 8388607", r"^bad.pmc:1:13: '8388607' is an online command, not allowed inside a program"),
         ("CLEAR", r"^bad.pmc:1:1: CLEAR outside a buffer"),
         ("OPEN PLC 1\nIF (P1=1)\nP2=1\nCLOSE", r"^bad.pmc:2:1: IF without ENDIF in PLC 1$"),
         ("OPEN PLC 1\nWHILE (P1<1)\nENDIF\nCLOSE",
@@ -165,9 +165,8 @@ def test_bad_text_is_refused_with_file_line_and_column(text: str, message: str) 
         ("OPEN PLC 1\nP1=1\nCLOSE", "ENABLE PLC 2", r"^cmd:1:1: PLC 2 does not exist \(PLC programs: 1\)$"),
         # an M-variable that nothing defines, or that names a register the model does not have
         ("OPEN PLC 1\nP1=M7\nCLOSE", "", r"^prog.pmc:2:4: M7 is not defined \(define it first"),
-        ("M9->X:$079000\nOPEN PLC 1\nP1=M9\nCLOSE", "",
-         r"^prog.pmc:1:1: M9->X:\$079000,0,24,U: the model has no register X:\$079000 \(modelled: encoder channels "
-         r"X:\$078008 and X:\$07800B; table lines X: and Y:\$3501..\)$"),
+        # G, M, T, D codes call PROG 1000..1003 at label N(code * 1000)
+        ("OPEN PROG 1\nG1\nCLOSE", "", r"^prog.pmc:2:1: PROG 1000 does not exist \(motion programs: 1\)$"),
     ],
 )
 def test_errors_that_need_the_whole_machine_are_found_before_the_run(sim: Simulation, program: str, commands: str,

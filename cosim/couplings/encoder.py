@@ -19,7 +19,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.couplings.roles import required, resolve
-from cosim.encoders import EncoderSample, extend_one_over_t
+from cosim.encoders import EncoderSample
 from cosim.errors import ConfigurationError
 from cosim.master import PlantLike
 from cosim.signals import Signal
@@ -62,9 +62,31 @@ class PlantEncoder:
         names = resolve(plant, "encoder", ROLES, variables)
         self._count, self._direction = required(names, "count"), required(names, "direction")
         self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
+        resolution = self.sim.timebase.resolution_s  # ticks = seconds * den / num
+        self._per_s = (resolution.denominator, resolution.numerator)
+        self._last_ceil: tuple[float, int] = (float("nan"), 0)
+
+    def _ticks_ceil(self, t_s: float) -> int:
+        """:meth:`cosim.timebase.TimeBase.ticks_from_seconds_ceil` in integers (the same rule, the same tick).
+
+        The float is exactly ``n / d`` (``d`` a power of two), so the time in ticks is exactly
+        ``A / B``; within 10^-6 tick of a whole tick (float noise of a time that was on one) it is
+        that tick (the nearest, halves to even, as ``round`` does), else the next tick up.
+        """
+        if t_s == self._last_ceil[0]:  # the same edge as last time (a slow or resting encoder)
+            return self._last_ceil[1]
+        n, d = t_s.as_integer_ratio()
+        den, num = self._per_s
+        a, b = n * den, d * num
+        q, r = divmod(a, b)
+        twice = 2 * r
+        nearest = q + 1 if twice > b or (twice == b and q & 1) else q
+        ticks = nearest if 1_000_000 * abs(a - nearest * b) <= b else (q + 1 if r else q)
+        self._last_ceil = (t_s, ticks)
+        return ticks
 
     def _edge(self, t_s: float) -> int | None:
-        t = self.sim.timebase.ticks_from_seconds_ceil(float(t_s))
+        t = self._ticks_ceil(t_s)
         return t if t > self.start else None
 
     def sample(self, t: int) -> EncoderSample:
@@ -78,10 +100,29 @@ class PlantEncoder:
         direction = 1 if int(read(self._direction)) >= 0 else -1
         return EncoderSample(int(read(self._count)), last, prev, direction)
 
+    def extended(self, t: int, fraction_bits: int) -> int:
+        """``extend_one_over_t(self.sample(t), t, fraction_bits)`` without building the sample (the servo cycle's)."""
+        sim = self.sim
+        if t != sim.now:
+            self.sample(t)  # raises: a plant is read now
+        read = self.plant.read
+        scale = 1 << fraction_bits
+        count = int(read(self._count))
+        last = self._ticks_ceil(float(read(self._last)))
+        if last <= self.start:
+            return count * scale
+        up = int(read(self._direction)) >= 0
+        boundary = count if up else count + 1
+        prev = self._ticks_ceil(float(read(self._prev)))
+        if prev <= self.start or last <= prev or t <= last:
+            return boundary * scale
+        frac = min(scale - 1, ((t - last) * scale) // (last - prev))
+        return boundary * scale + frac if up else boundary * scale - frac
+
     def position(self, *, fraction_bits: int = 5) -> Fraction:
         """1/T-extended position now [counts], truncated to ``2^-fraction_bits`` count."""
         now = self.sim.now
-        return Fraction(extend_one_over_t(self.sample(now), now, fraction_bits), 1 << fraction_bits)
+        return Fraction(self.extended(now, fraction_bits), 1 << fraction_bits)
 
 
 def watch_mark(plant: PlantLike, *, signal: str | None = None,

@@ -25,11 +25,10 @@ from collections.abc import Mapping
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from cosim.controllers.pmac.motor import Motor
-from cosim.controllers.pmac.servo import DAC_MAX, DAC_VOLTS_PER_BIT, MotorModel, PidDesign
+from cosim.controllers.pmac.servo import DAC_MAX, DAC_VOLTS_PER_BIT, MotorModel, PidDesign, cached_design
 from cosim.couplings.encoder import ROLES as ENCODER_ROLES
 from cosim.couplings.encoder import PlantEncoder
 from cosim.couplings.roles import required, resolve
@@ -41,12 +40,19 @@ from cosim.validate import integer
 if TYPE_CHECKING:
     from cosim.controllers.pmac.ports import ServoPort
 
+_DAC_NUM, _DAC_DEN = DAC_VOLTS_PER_BIT.numerator, DAC_VOLTS_PER_BIT.denominator
 ROLES: dict[str, str | None] = {"command": "u_cmd", **ENCODER_ROLES}
 """Roles of the servo coupling and the Servo FMU's variables that play them."""
 
 
 def dac_volts(dac_bits: float) -> float:
-    """DAC bits to the command voltage [V] (``DAC_VOLTS_PER_BIT`` per bit)."""
+    """DAC bits to the command voltage [V] (``DAC_VOLTS_PER_BIT`` per bit).
+
+    For whole bits (what the DAC gives) in integers: ``bits * 10 / 32768`` is the correctly rounded
+    float of the exact product, as ``float(bits * DAC_VOLTS_PER_BIT)``.
+    """
+    if type(dac_bits) is int:
+        return dac_bits * _DAC_NUM / _DAC_DEN
     return float(dac_bits * DAC_VOLTS_PER_BIT)
 
 
@@ -75,8 +81,10 @@ def connect_servo(motor: Motor, plant: PlantLike, *, fraction_bits: int = 5,
     encoder = PlantEncoder(plant, variables={role: names[role] for role in ENCODER_ROLES})
     plant.drive(required(names, "command"), motor.dac, convert=dac_volts)
 
+    extended, sim, scale = encoder.extended, encoder.sim, 1 << fraction_bits
+
     def feedback() -> float:
-        return float(encoder.position(fraction_bits=fraction_bits))
+        return extended(sim.now, fraction_bits) / scale  # = float(encoder.position(...)): exact
 
     motor.feedback = feedback
     return encoder
@@ -108,8 +116,18 @@ def full_model_margins(design: PidDesign, params: ServoParameters, *,
 
     The plant is ``cosim.plants.servo.linear_model(params, output="angle")`` (with the
     inductance) in counts per DAC bit, sampled with a zero-order hold at the servo period and
-    closed with the designed discrete controller.
+    closed with the designed discrete controller. Kept on disk by its inputs, as the design is
+    (:func:`cosim.controllers.pmac.servo.cached_design`).
     """
+    inputs = {"design": dataclasses.asdict(design), "params": dataclasses.asdict(params),
+              "volts_per_bit": float(volts_per_bit)}
+    value = cached_design("margins", inputs, lambda: _margins(design, params, volts_per_bit))
+    return value["gain_margin_db"], value["phase_margin_deg"], value["radius"]
+
+
+def _margins(design: PidDesign, params: ServoParameters, volts_per_bit: float | Fraction) -> dict[str, float]:
+    import control  # python-control only where a loop is checked (see cosim.controllers.pmac.servo)
+
     scale = params.counts_per_rev / (2 * math.pi) * float(volts_per_bit)
     plant_d = control.sample_system(linear_model(params, output="angle") * scale, design.period_s, method="zoh")
     controller = control.ss(np.array(design.a), np.array(design.b).reshape(-1, 1),
@@ -118,7 +136,7 @@ def full_model_margins(design: PidDesign, params: ServoParameters, *,
     gm, pm, *_rest = control.stability_margins(loop, method="frd")
     radius = float(np.max(np.abs(control.poles(control.feedback(loop, 1)))))
     gm_db = float(20 * math.log10(gm)) if np.isfinite(gm) and gm > 0 else math.inf
-    return gm_db, float(pm), radius
+    return {"gain_margin_db": gm_db, "phase_margin_deg": float(pm), "radius": radius}
 
 
 def full_scale_speed_counts_per_ms(params: ServoParameters, *,

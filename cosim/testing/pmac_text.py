@@ -1,8 +1,8 @@
 """Fuzz inputs for the PMAC text parsers: generated token soups and mutations of real PMAC files.
 
 Used by ``tests/test_pmac_fuzz.py`` (a few hundred inputs per run) and ``bench/bench_pmac_fuzz.py``
-(millions). :func:`feed` gives one text to every reader of PMAC text -- ``parse_setup``,
-``parse_text``, ``Pmac.load`` and a line of online commands -- and to a short run when it loads,
+(millions). :func:`feed` gives one text to every reader of PMAC text -- the download preprocessor,
+``parse_setup``, ``parse_text``, ``Pmac.load`` and a line of online commands -- and to a short run when it loads,
 and returns the name of the first that raised something other than the project's own errors.
 """
 
@@ -12,6 +12,7 @@ import random
 from collections.abc import Callable
 
 from cosim.controllers.pmac import Pmac
+from cosim.controllers.pmac.preprocess import preprocess
 from cosim.controllers.pmac.program import parse_text
 from cosim.controllers.pmac.setupfile import parse_setup
 from cosim.errors import CosimError
@@ -30,6 +31,21 @@ TOKENS = (
     ">=", "<=", "AND", "OR", "ABS(", "INT(", "1e5", "1.5", ".5", "99999999999999999", "0.000000000000000000001",
     "3713707", "8388607", "8388608", "-1", "nan", "inf", "Infinity", "sNaN", ";", "; comment", "\ufeff", "é",
     "/0", "%0", "P1=P2/P3", "P1=P1*P1*P1", "ENABLE PLC 1", "&1B1R", "M1->*", "M1=1/3", "GOSUB10", "WHILE(1=1)",
+    # the whole language (issue 27): preprocessor, variables, kinematics, program commands, online commands
+    "#define", "#define N 5", "#define X P1+", "#undefine", "#undef N", "#include", '#include "x.pmc"', "#ifdef",
+    "#ifndef N", "#else", "#endif", "#pragma", "####", "$(PLC)", "$(", "$()", "//", "/*", "*/", "N", "Q(", "P(",
+    "M(", "I(", "Q7", "Q8191", "Q8192", "I5111", "I5212", "I5150=1", "I5250", "I5113=10", "I7000", "I7012,4,10=1",
+    "I100..131=0", "I5213,15,100=10", "I130=*", "I100..131=*", "M0..8191->*", "M1->D:$8B", "M2->L:$6000",
+    "M3->DP:$60000", "M4->F:$60001", "M5->TWS:1", "M6->", "#1->I", "#2->0", "#3->500X+300Y+100", "#1->", "&16",
+    "&17", "UNDEFINE", "UNDEFINE ALL", "OPEN FORWARD", "OPEN INVERSE", "OPEN FORWARD 2 CLEAR", "OPEN ROTARY",
+    "OPEN PLC 1 CLEAR P1=1 CLOSE", "CLOSE ALL", "CLEAR ALL", "CIRCLE1", "CIRCLE2", "NORMAL K-1", "I10 J0", "R5",
+    "R-5", "PVT50", "X10:50", "SPLINE1", "TM50", "X10^5", "ABS(X,Y)", "INC(Z)", "HOME1", "HOMEZ", "#1HMZ", "#1J+",
+    "#1J=100", "#1J/", "#1O10", "PMATCH", "FRAX(X,Y)", "NOFRAX", "AND (P1=1)", "OR (P2=2)", "CMD^A", "COMMAND\"R\"",
+    "CMD\"&2B2R\"", "^A", "^D", "^K", "SEND1\"HI\"", "DISPLAY 0 \"X\"", "DISPLAY 40,8.3,P1", "ADDRESS &2 #3",
+    "ENABLE PLC 2..31", "DISABLE PLCC 0..31", "PAUSE PLC 1", "RESUME PLC 1", "DEFINE GATHER", "GATHER", "ENDGATHER",
+    "END GATHER", "DELETE GATHER", "MS0,MI910=$F", "MSR0,MI920,P1", "LIST PROG 1", "$$$", "???", "G01", "M03", "T1",
+    "D01", "CALL 10.5", "CALL 5 X10", "GOTO(P1)", "GOSUB(P2+1)", "SIN(30)", "ATAN2(1)", "SQRT(-1)", "LN(0)",
+    "EXP(100)", "ACOS(2)", "342", "STOP", "WAIT", "CC1", "BLOCKSTART", "LOCK4,P10", "READ(X,Y)",
 )
 #: Separators, every line end among them.
 SEPARATORS = (" ", " ", " ", "", "\n", "\n", "\r\n", "\r", "\t", "\x0b", "\x0c", "\x1c", "\x85", "\u2028", "\x00")
@@ -46,6 +62,16 @@ CORPUS = (
     "OPEN PLC 0 CLEAR\nP1=P1+1 IF (P1=3) CMD\"&1 B2 R\" ELSE P2=ABS(-P1)/INT(2.5)%3&1|2^4\nCLOSE\n",
     "OPEN PLC 1 CLEAR\nP1=P1+1\nP4=P1/(P1-2) P5=P4%(P1-3) P6=P6*2+1\nN10 IF (P1>5) GOSUB10\nCLOSE\n"
     "ENABLE PLC 1\n",
+    # a project's file: preprocessor, template macros, I-variable ranges, kinematics, PLCs with timers and CMD
+    "#define TICKS P50\n#define TIMER I5111\n#define ANGLE 30\nI100,4,100=1 I130,4,100=2000 I5150=1 I5113=5\n"
+    "&1 #1->I #2->I\nOPEN FORWARD 1 CLEAR\nQ7=(P1*COS(ANGLE)-P2*SIN(ANGLE))/1000\nQ8=P2/1000\nCLOSE\n"
+    "OPEN INVERSE 1 CLEAR\nP1=Q7*1000\nP2=(Q7+Q8)*1000\nCLOSE\nOPEN PROG 1 CLEAR\nLINEAR ABS TA10 TS5 F(Q20+100)\n"
+    "P10=0\nWHILE (P10<2)\nX(P(200+P10)) Y(Q(P10))\nP10=P10+1\nENDWHILE\nCIRCLE1 X0 Y0 R5\nPVT20 X1:0\nCLOSE\n"
+    "OPEN PLC $(PLC) CLEAR\nIF (TIMER<0)\nAND (TICKS<3)\nTICKS=TICKS+1 SEND1\"TICK\" TIMER=100\nENDIF\nCLOSE\n"
+    "ENABLE PLC 1\n",
+    "I5=3\nM0..8191->*\nM103->X:$07800B,0,24,S M162->D:$8B\nUNDEFINE ALL\n&1 #1->1000X #2->500X+500Y\n"
+    "OPEN PROG 1 CLEAR\nSPLINE1 TM20\nX1 Y2\nX2 Y3\nRAPID X0\nHOME1 FRAX(X,Y)\nCMD^A\nCLOSE\n"
+    "OPEN PLC 1 CLEAR ADDRESS &1 IF (M1=0) CMD\"&1B1R\" DISABLE PLC 1..2 CLOSE\nDEFINE GATHER\nMS0,MI910=1\n",
 )
 
 
@@ -95,13 +121,14 @@ def draw(rng: random.Random) -> str:
 def _load_and_run(text: str) -> None:
     with Simulation() as sim:
         pmac = Pmac(sim)
-        pmac.load(text, source="fuzz.pmc")
+        pmac.load(text, source="fuzz.pmc", defines={"PLC": "1"})
         pmac.command("&1 B1 R", source="fuzz command")
         pmac.start()
         sim.run(until=sim.ticks("3 ms"))
 
 
 READERS: dict[str, Callable[[str], object]] = {
+    "preprocess": lambda text: preprocess(text, source="fuzz.pmc", defines={"PLC": "1"}),
     "parse_setup": lambda text: parse_setup(text, source="fuzz.pmc"),
     "parse_text": lambda text: parse_text(text, source="fuzz.pmc"),
     "command": lambda text: Pmac(Simulation()).programs.parse_command(text.split("\n", 1)[0], source="fuzz"),

@@ -1,18 +1,18 @@
-"""Delta Tau PMAC external time base and Turbo PMAC triggered time base.
+"""Delta Tau PMAC external time base, Turbo PMAC triggered time base, and the Turbo PMAC language.
 
 A slave axis runs on the time of a master encoder: an encoder conversion table entry
 differentiates the master position every servo cycle into a time-base value, Ix93 points a
 coordinate system at it, Ix94 limits how fast it may change, and the Turbo triggered entry
 freezes, arms and starts motion at a captured master position. See ``docs/pmac.md``.
 
-Modules: :mod:`.units` (I10, servo clock, 2^-23 ms units), :mod:`.encoder` (1/T extension,
-capture), :mod:`.ect` (conversion table), :mod:`.motion` and :mod:`.profile` (moves), :mod:`.coord`
-(coordinate system, Ix93/Ix94, slip), :mod:`.servo` (PID design and loop), :mod:`.motor`,
-:mod:`.ivars` (the I-variables), :mod:`.machine` (the controller). Programs as text:
-:mod:`.grammar`, :mod:`.statements`, :mod:`.nodes`, :mod:`.program`, :mod:`.setupfile` (reading),
-:mod:`.arith`, :mod:`.mvars`, :mod:`.interpreter`, :mod:`.runtime` (running). Encoders and their
-1/T extension are shared with the plants in :mod:`cosim.encoders`; ready-made machines are in
-:mod:`cosim.rigs`.
+Modules, lowest layer first (``docs/pmac.md``, "Modules"): numbers, time and moves -- :mod:`.units`,
+:mod:`.arith`, :mod:`.profile`, :mod:`.pieces`, :mod:`.paths`, :mod:`.motion`, :mod:`.runner`; hardware --
+:mod:`.encoder`, :mod:`.ect`, :mod:`.coord`, :mod:`.motor`, :mod:`.servo`, :mod:`.ivartable`; the language
+front end, one way from text to running -- :mod:`.source`, :mod:`.preprocess` (text), :mod:`.grammar`,
+:mod:`.syntax`, :mod:`.nodes` (syntax tree), :mod:`.program`, :mod:`.setupfile` (program), :mod:`.bus`,
+:mod:`.mvars`, :mod:`.evaluate`, :mod:`.interpreter`, :mod:`.commands`, :mod:`.runtime` (runtime); and
+:mod:`.machine` (the controller), :mod:`.ports`. Encoders and their 1/T extension are shared with the
+plants in :mod:`cosim.encoders`; ready-made machines are in :mod:`cosim.rigs`.
 """
 
 from cosim.controllers.pmac.coord import CoordinateSystem, LimitEvent

@@ -33,13 +33,14 @@ advance, the feeder may queue more (:meth:`CoordinateSystem.queue`).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING, Protocol
 
 from cosim import validate
-from cosim.controllers.pmac.motion import Item, LinearMove, ProgramRunner, Segment, compile_item
+from cosim.controllers.pmac.motion import Item, LinearMove, Segment, compile_item
+from cosim.controllers.pmac.runner import ProgramRunner
 from cosim.controllers.pmac.units import IX94_ALLOWED, IX94_DEFAULT, IX94_MAX, REG_MAX, hexaddr, percent
 from cosim.errors import ConfigurationError
 from cosim.signals import Signal
@@ -61,7 +62,7 @@ class TimeBaseSource(Protocol):
         ...
 
     @property
-    def units_per_count(self) -> Fraction | None:
+    def units_per_count(self) -> int | None:
         """Time-base units per master count (None for a software register: not external)."""
         ...
 
@@ -76,7 +77,7 @@ class PercentRegister:
         Servo interrupt time; ``%100`` writes I10.
     """
 
-    units_per_count: Fraction | None = None
+    units_per_count: int | None = None
 
     def __init__(self, address: int, i10: int) -> None:
         self.address = address
@@ -178,6 +179,11 @@ class CoordinateSystem:
         self._end: dict[str, Fraction] = {}
         self._ideal_end: dict[str, Fraction] = {}
         self._started = False
+        self._last: list[int | bool | None] = [None, None, None, None]  # actual, source, limited, slip as recorded
+        self._dwell_noted = False
+        self._program_name: str | None = None
+        #: Called with (program name, True) when a program starts and (name, False) when it reaches its end.
+        self.on_program: Callable[[str, bool], None] | None = None
         p = f"{device}.cs{number}"
         self._tb = Signal(sim, f"{p}.timebase", kind="int", unit="2^-23 ms", description="actual time-base value")
         self._pct = Signal(sim, f"{p}.timebase_pct", kind="real", unit="%", description="actual time base in %")
@@ -232,17 +238,41 @@ class CoordinateSystem:
         return percent(self.actual, self.i10)
 
     # -- programs ---------------------------------------------------------------------------
-    def run_program(self, items: Iterable[Item]) -> None:
+    def run_program(self, items: Iterable[Item], *, name: str = "") -> None:
         """Start a motion program (a list of moves); it begins at the next servo cycle."""
         if not self.program_done:
             raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
         self._pending = list(items)
+        self._program_name = name or f"CS{self.number} program"
 
-    def run_feeder(self, feeder: Feeder) -> None:
+    def run_feeder(self, feeder: Feeder, *, name: str = "") -> None:
         """Start a motion program that is calculated as it runs; it begins at the next servo cycle."""
         if not self.program_done:
             raise ConfigurationError(f"coordinate system {self.number} is still running a program or jog")
         self._pending = feeder
+        self._program_name = name or f"CS{self.number} program"
+
+    def abort(self, reason: str) -> None:
+        """``A``/``K``/``^A``: the program stops now; every axis holds its commanded position (no deceleration)."""
+        positions = {axis: self.position(axis) for axis in self.axes}
+        ideal = {axis: self.ideal_position(axis) for axis in self.axes}
+        self._pending = self._feeder = None
+        self._runner = ProgramRunner([], positions)
+        self._ideal = ProgramRunner([], ideal)
+        self.axes = positions
+        self.notes.append((self.sim.now, reason))
+        self._program_name = None
+
+    def set_positions(self, positions: dict[str, Fraction]) -> None:
+        """Where the axes are (forward kinematics at ``R`` or ``PMATCH``), while no program runs."""
+        if not self.program_done:
+            raise ConfigurationError(f"coordinate system {self.number}: axis positions change only while no "
+                                     "program runs")
+        current = {axis: self.position(axis) for axis in self.axes}
+        current.update(positions)
+        self.axes = current
+        self._runner = ProgramRunner([], current)
+        self._ideal = ProgramRunner([], dict(current))
 
     def queue(self, item: Item) -> int:
         """Append a move to the running program (from a feeder); returns its segment index."""
@@ -287,6 +317,14 @@ class CoordinateSystem:
         """Master-derived (slip-free) position of ``axis`` [axis units]."""
         return self._ideal.position(axis) if self._ideal is not None else self.axes[axis]
 
+    def position_ratio(self, axis: str, *, ideal: bool = False) -> tuple[int, int]:
+        """:meth:`position` (or :meth:`ideal_position`) as ``(numerator, denominator)`` integers."""
+        runner = self._ideal if ideal else self._runner
+        if runner is not None:
+            return runner.position_ratio(axis)
+        value = self.axes[axis]
+        return value.numerator, value.denominator
+
     @property
     def slip_counts(self) -> Fraction | None:
         """Accumulated slip [master counts] (None if the source is not external)."""
@@ -300,40 +338,57 @@ class CoordinateSystem:
 
     # -- servo cycle ------------------------------------------------------------------------
     def update(self, cycle: int, t: int) -> None:
-        """One servo cycle: read the source, apply Ix94, advance the program."""
+        """One servo cycle: read the source, apply Ix94, advance the program (integers only)."""
         source = self.source.read()
         self.source_value = source
         if not self._started:
             self.actual = source
             self._started = True
+        actual = self.actual
         hold = self.holding or self.releasing
         target = 0 if self.holding else source
         rate = self.ix95 if hold else self.ix94
-        diff = target - self.actual
-        step = max(-rate, min(rate, diff))
-        self.actual += step
+        diff = target - actual
+        step = -rate if diff < -rate else (rate if diff > rate else diff)
+        actual += step
+        self.actual = actual
         limited = step != diff
-        external = self.external
+        upc = self.source.units_per_count
+        external = upc is not None
         if hold:
             if external:
-                self.slip_units += source - self.actual
+                self.slip_units += source - actual
             if self.releasing and not limited:
                 self.releasing = False
             limited = False
         elif limited:
             if external:
-                self.slip_units += source - self.actual
+                self.slip_units += source - actual
                 if not any("Ix94" in n for _, n in self.notes):
                     self.notes.append((t, f"Ix94 limit acted under external time base at cycle {cycle}: "
                                              "position synchronization to the master is lost"))
-            self.limit_events.append(LimitEvent(cycle, t, source, self.actual, self.slip_counts))
-        self._advance_program(source if external else self.actual, t)
-        self._tb.set(self.actual)
-        self._pct.set(float(self.percent))
-        self._src.set(source)
-        slip = self.slip_counts
-        self._slip.set(int(slip) if slip is not None else 0)
-        self._active.set(limited)
+            self.limit_events.append(LimitEvent(cycle, t, source, actual, self.slip_counts))
+        if self._runner is not None or self._pending is not None:
+            self._advance_program(source if external else actual, t)
+        last = self._last
+        if actual != last[0]:
+            last[0] = actual
+            self._tb.set(actual)
+            self._pct.set(100 * actual / self.i10)  # = float(percent(actual, I10)), correctly rounded
+        if source != last[1]:
+            last[1] = source
+            self._src.set(source)
+        slip = 0
+        if upc is not None and self.slip_units:
+            slip = abs(self.slip_units) // upc  # truncated toward zero, as int(slip_counts)
+            if self.slip_units < 0:
+                slip = -slip
+        if slip != last[3]:
+            last[3] = slip
+            self._slip.set(slip)
+        if limited != last[2]:
+            last[2] = limited
+            self._active.set(limited)
 
     def _start_pending(self) -> None:
         pending, self._pending = self._pending, None
@@ -344,6 +399,8 @@ class CoordinateSystem:
         self._ideal = ProgramRunner([], ideal)
         self._end, self._ideal_end = dict(start), dict(ideal)
         self.axes = start
+        if self.on_program is not None and self._program_name is not None:
+            self.on_program(self._program_name, True)
         if isinstance(pending, list):
             self._feeder = None
             for item in pending:
@@ -359,7 +416,8 @@ class CoordinateSystem:
         feeder = self._feeder
         if feeder is not None:
             feeder.calculate(self, t)
-        if self._runner.in_dwell and self.external and not any("DWELL" in n for _, n in self.notes):
+        if not self._dwell_noted and self._runner.in_dwell and self.external:
+            self._dwell_noted = True
             self.notes.append((t, "DWELL under external time base: it runs in real time, so "
                                      "synchronism with the master is lost"))
         self._runner.advance(self.actual, self.i10)
@@ -368,6 +426,14 @@ class CoordinateSystem:
             feeder.calculate(self, t)
             if feeder.finished and self._runner.done:
                 self._feeder = None
+                self._ended()
+        elif self._runner.done:
+            self._ended()
+
+    def _ended(self) -> None:
+        name, self._program_name = self._program_name, None
+        if name is not None and self.on_program is not None:
+            self.on_program(name, False)
 
     def describe_source(self) -> str:
         """Ix93 as text, e.g. ``$2000 (CS1 % register)``."""

@@ -26,7 +26,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from fractions import Fraction
 
 from cosim import validate
 from cosim.controllers.pmac.encoder import ONE_OVER_T_BITS, TRIGGERED_BITS, EncoderChannel
@@ -131,14 +130,19 @@ class OneOverTEntry(Entry):
         self.channel_address = channel_address & _ADDRESS_MASK
         self.flags = channel_address & _FLAG_BIT
         self.position = 0
+        self.unconnected = False
         self._channel_obj: EncoderChannel | None = None
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
-        self._channel_obj = self._channel(channels, self.channel_address, "channel address")
+        """Its encoder channel must exist -- unless the table lets it stay unconnected (then it reads 0)."""
+        self._channel_obj = channels.get(self.channel_address)
+        self.unconnected = self._channel_obj is None
+        if self.unconnected and not table.allow_unconnected(self):
+            self._channel(channels, self.channel_address, "channel address")  # raises, naming the channels
 
     def convert(self, t: int, table: ConversionTable) -> None:
-        assert self._channel_obj is not None
-        self.position = self._channel_obj.position(t, ONE_OVER_T_BITS)
+        if self._channel_obj is not None:
+            self.position = self._channel_obj.position(t, ONE_OVER_T_BITS)
 
     def x_word(self, offset: int) -> int:
         return self.position & REG_MASK
@@ -171,7 +175,7 @@ class DifferentiatingEntry(Entry):
         return True
 
     @property
-    def units_per_count(self) -> Fraction:
+    def units_per_count(self) -> int:
         """Time-base units (2^-23 ms) per master count moved in one servo cycle."""
         raise NotImplementedError
 
@@ -213,9 +217,9 @@ class TimeBaseEntry(DifferentiatingEntry):
         self.position = 0
 
     @property
-    def units_per_count(self) -> Fraction:
+    def units_per_count(self) -> int:
         bits = self._source.position_bits if self._source is not None else ONE_OVER_T_BITS
-        return Fraction(2 * self.scale_factor << (bits or 0))
+        return 2 * self.scale_factor << (bits or 0)
 
     def bind(self, table: ConversionTable, channels: Mapping[int, EncoderChannel]) -> None:
         source = table.entry_at(self.source_address)
@@ -319,8 +323,8 @@ class TriggeredTimeBaseEntry(DifferentiatingEntry):
         return TRIGGERED_METHODS[self.method]
 
     @property
-    def units_per_count(self) -> Fraction:
-        return Fraction(2 * self.scale_factor << TRIGGERED_BITS)
+    def units_per_count(self) -> int:
+        return 2 * self.scale_factor << TRIGGERED_BITS
 
     def set_method(self, method: int, *, t: int = 0) -> None:
         """Change the method digit (a write of the first line: ``I8010=$B78008``)."""
@@ -394,6 +398,8 @@ class ConversionTable:
         self.base_address = base_address
         self.entries: list[Entry] = []
         self.cycle = -1
+        #: Let 1/T entries that no time-base entry reads stay without an encoder (a motor the model does not couple).
+        self.lenient = False
         self._by_address: dict[int, Entry] = {}
 
     def add(self, entry: Entry, *, at: int | None = None) -> Entry:
@@ -426,6 +432,11 @@ class ConversionTable:
     def time_base_entries(self) -> list[DifferentiatingEntry]:
         """Entries whose final result is a time-base value."""
         return [e for e in self.entries if isinstance(e, DifferentiatingEntry)]
+
+    def allow_unconnected(self, entry: Entry) -> bool:
+        """True if ``entry`` may have no encoder: the table is lenient and no time-base entry takes it as source."""
+        return self.lenient and not any(isinstance(e, TimeBaseEntry) and e.source_address == entry.address
+                                        for e in self.entries)
 
     def bind(self, channels: Mapping[int, EncoderChannel]) -> None:
         """Resolve every entry's sources; raises ConfigurationError naming the bad one."""

@@ -67,6 +67,8 @@ class EncoderChannel:
         self.captured_pos256: int | None = None
         self.capture_t: int | None = None
         self.captures: list[tuple[int, int]] = []
+        extended = getattr(encoder, "extended", None)  # a source may extend without building a sample
+        self._extended = extended if callable(extended) else None
         self._flag = Signal(sim, f"{device}.{self.name}.capture_flag", kind="bit",
                             description=f"capture flag of encoder channel ${address:06X}")
         if trigger is not None:
@@ -76,6 +78,8 @@ class EncoderChannel:
 
     def position(self, t: int, fraction_bits: int) -> int:
         """1/T-extended position at ``t`` [2^-fraction_bits count], unwrapped."""
+        if self._extended is not None:
+            return self._extended(t, fraction_bits)
         return extend_one_over_t(self.encoder.sample(t), t, fraction_bits)
 
     def count(self, t: int) -> int:

@@ -26,11 +26,12 @@ floating-point square root); one axis is always exact.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from fractions import Fraction
 
 from cosim import validate
+from cosim.controllers.pmac.paths import Arc, AxisPath, CirclePath, HermitePath, Path, SampledPath
 from cosim.controllers.pmac.profile import Profile
 from cosim.controllers.pmac.units import UNITS_PER_MS
 from cosim.errors import ConfigurationError
@@ -90,6 +91,7 @@ class Move:
     tm_ms: Number | None = None
     ta_ms: Number = 10
     ts_ms: Number = 0
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if (self.feedrate is None) == (self.tm_ms is None):
@@ -116,9 +118,45 @@ class RapidAxis:
 
 @dataclass(frozen=True)
 class RapidMove:
-    """RAPID: each axis to its target on its own profile (not coordinated)."""
+    """RAPID: each axis to its target on its own profile (not coordinated); followers on the longest one."""
 
     axes: Mapping[str, RapidAxis]
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class PvtMove:
+    """PVT / SPLINE1: each axis from its position and velocity ``v0`` to ``targets`` at ``v1`` in ``t_ms``.
+
+    Velocities in axis units/ms. Followers (kinematic motors) move linearly in time.
+    """
+
+    targets: Mapping[str, Fraction]
+    v0: Mapping[str, Fraction]
+    v1: Mapping[str, Fraction]
+    t_ms: Fraction
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CircleMove:
+    """CIRCLE1 (clockwise) / CIRCLE2: an arc in the plane ``plane`` (two axes), other axes helical.
+
+    The centre is given as ``centre`` (the vector from the start point to it, in the plane's axes)
+    or as ``radius`` (> 0: the short arc, < 0: the long one). Speed F [units/s] along the path, or
+    move time TM, with TA and TS as a LINEAR move.
+    """
+
+    targets: Mapping[str, Fraction]
+    plane: tuple[str, str]
+    clockwise: bool
+    centre: tuple[Fraction, Fraction] | None = None
+    radius: Fraction | None = None
+    feedrate: Fraction | None = None
+    tm_ms: Fraction | None = None
+    ta_ms: Fraction = Fraction(10)
+    ts_ms: Fraction = Fraction(0)
+    followers: Mapping[str, Fraction] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -141,29 +179,20 @@ class Dwell:
         object.__setattr__(self, "ms", validate.positive(self.ms, "DWELL time", unit="ms", zero=True))
 
 
-Item = LinearMove | Move | RapidMove | Delay | Dwell
-
-
 @dataclass(frozen=True)
-class AxisPath:
-    """What one axis does in a segment: from ``start`` to ``target`` along ``profile``.
+class Segmented:
+    """A move whose kinematic motors follow ``inverse`` of the axis positions every ``segment_ms`` (Isx13).
 
-    The axis is at ``start + (target - start) * travelled / profile.distance`` (a LINEAR move of
-    several axes shares one profile over the path length).
+    ``inverse`` takes every axis position [axis units] and returns the kinematic motors' counts
+    (``#n`` keys); between segment points the motors move in straight lines.
     """
 
-    axis: str
-    start: Fraction
-    target: Fraction
-    profile: Profile
+    item: LinearMove | Move | RapidMove | PvtMove | CircleMove
+    segment_ms: Fraction
+    inverse: Callable[[dict[str, Fraction]], dict[str, Fraction]]
 
-    def position(self, tau_ms: Fraction) -> Fraction:
-        """Position at ``tau_ms`` into the segment [axis units]."""
-        if self.profile.distance == 0:
-            return self.target if tau_ms >= self.profile.total_ms else self.start
-        if tau_ms >= self.profile.total_ms:
-            return self.target
-        return self.start + (self.target - self.start) * self.profile.travelled(tau_ms) / self.profile.distance
+
+Item = LinearMove | Move | RapidMove | PvtMove | CircleMove | Delay | Dwell | Segmented
 
 
 @dataclass(frozen=True)
@@ -182,7 +211,15 @@ class Segment:
 
     real_time: bool
     duration_units: Fraction
-    paths: tuple[AxisPath, ...] = ()
+    paths: tuple[Path, ...] = ()
+    _by_axis: dict[str, Path] = field(default_factory=dict, compare=False, repr=False, init=False)
+
+    def __post_init__(self) -> None:
+        self._by_axis.update({p.axis: p for p in reversed(self.paths)})
+
+    def path(self, axis: str) -> Path | None:
+        """The path of ``axis`` in this segment (None: it does not move here)."""
+        return self._by_axis.get(axis)
 
     @property
     def axis(self) -> str | None:
@@ -195,19 +232,24 @@ class Segment:
         return self.paths[0].target if self.paths else Fraction(0)
 
     @property
+    def profile(self) -> Profile | None:
+        """The first axis's profile (None for holds and PVT/spline segments)."""
+        return getattr(self.paths[0], "profile", None) if self.paths else None
+
+    @property
     def speed(self) -> Fraction:
         """Plateau speed of the first axis's profile [units/ms]."""
-        return self.paths[0].profile.speed if self.paths else Fraction(0)
+        return self.profile.speed if self.profile is not None else Fraction(0)
 
     @property
     def ta_ms(self) -> Fraction:
         """Acceleration time of the first axis's profile [ms]."""
-        return self.paths[0].profile.accel_ms if self.paths else Fraction(0)
+        return self.profile.accel_ms if self.profile is not None else Fraction(0)
 
     @property
     def move_ms(self) -> Fraction:
         """Move time of the first axis's profile [ms]."""
-        return self.paths[0].profile.move_ms if self.paths else Fraction(0)
+        return self.profile.move_ms if self.profile is not None else Fraction(0)
 
     def position(self, tau_ms: Fraction, axis: str | None = None) -> Fraction:
         """Position of ``axis`` (default: the first moving axis) at ``tau_ms`` into the segment (exact)."""
@@ -246,20 +288,114 @@ def compile_item(item: Item, current: dict[str, Fraction]) -> Segment:
                                tm_ms=None if item.tm_ms is None else Fraction(item.tm_ms))
         paths = tuple(AxisPath(a, current[a], t, profile) for a, t in targets.items())
         current.update(targets)
-        return Segment(False, profile.total_ms * UNITS_PER_MS, paths)
+        return Segment(False, profile.total_ms * UNITS_PER_MS, paths + _followers(item.followers, profile, current))
     if isinstance(item, RapidMove):
         _check_axes(item.axes, current, "RAPID move")
         paths = tuple(AxisPath(a, current[a], r.target,
                                Profile.plan(abs(r.target - current[a]), ta_ms=r.ta_ms, ts_ms=r.ts_ms, speed=r.speed))
                       for a, r in item.axes.items())
         current.update({a: r.target for a, r in item.axes.items()})
-        longest = max((p.profile.total_ms for p in paths), default=Fraction(0))
-        return Segment(False, longest * UNITS_PER_MS, paths)
+        longest = max((p.profile for p in paths), key=lambda p: p.total_ms, default=None)
+        followers = _followers(item.followers, longest, current) if longest is not None else ()
+        return Segment(False, (longest.total_ms if longest is not None else Fraction(0)) * UNITS_PER_MS,
+                       paths + followers)
+    if isinstance(item, PvtMove):
+        _check_axes(item.targets, current, "PVT/SPLINE move")
+        t = item.t_ms
+        pvt: tuple[Path, ...] = tuple(HermitePath(a, current[a], target, item.v0.get(a, Fraction(0)),
+                                                  item.v1.get(a, Fraction(0)), t) for a, target in item.targets.items())
+        pvt += tuple(HermitePath(a, current.get(a, Fraction(0)), target, (target - current.get(a, Fraction(0))) / t,
+                                 (target - current.get(a, Fraction(0))) / t, t) for a, target in item.followers.items())
+        current.update(item.targets)
+        current.update(item.followers)
+        return Segment(False, t * UNITS_PER_MS, pvt)
+    if isinstance(item, CircleMove):
+        return compile_circle(item, current)
+    if isinstance(item, Segmented):
+        return compile_segmented(item, current)
     if isinstance(item, Delay):
         return Segment(False, Fraction(item.ms) * UNITS_PER_MS)
     if isinstance(item, Dwell):
         return Segment(True, Fraction(item.ms) * UNITS_PER_MS)
     raise ConfigurationError(f"program item {item!r} is not a LinearMove, Move, RapidMove, Delay or Dwell")
+
+
+def _followers(followers: Mapping[str, Fraction], profile: Profile, current: dict[str, Fraction]
+               ) -> tuple[Path, ...]:
+    """Kinematic motors of a move: each from its count now to its end count along the move's profile."""
+    paths = tuple(AxisPath(name, current.get(name, Fraction(0)), target, profile) for name, target in followers.items())
+    current.update(followers)
+    return paths
+
+
+def _arc(item: CircleMove, start: tuple[Fraction, Fraction], end: tuple[Fraction, Fraction]) -> Arc:
+    """The arc from ``start`` to ``end`` (plane coordinates) about the item's centre or with its radius."""
+    sx, sy = float(start[0]), float(start[1])
+    ex, ey = float(end[0]), float(end[1])
+    direction = -1.0 if item.clockwise else 1.0
+    if item.centre is not None:
+        cx, cy = sx + float(item.centre[0]), sy + float(item.centre[1])
+    else:
+        assert item.radius is not None
+        r = abs(float(item.radius))
+        mx, my = (sx + ex) / 2, (sy + ey) / 2
+        half = math.hypot(ex - sx, ey - sy) / 2
+        if half == 0 or half > r * (1 + 1e-12):
+            raise ConfigurationError(f"CIRCLE with R{item.radius}: the end point is {2 * half:.6g} units from the "
+                                     f"start, farther than the diameter {2 * r:.6g}")
+        h = math.sqrt(max(r * r - half * half, 0.0))
+        ux, uy = (ex - sx) / (2 * half), (ey - sy) / (2 * half)
+        side = direction * (1.0 if item.radius > 0 else -1.0)  # the short arc turns the centre to this side
+        cx, cy = mx - side * h * uy, my + side * h * ux
+    r0, r1 = math.hypot(sx - cx, sy - cy), math.hypot(ex - cx, ey - cy)
+    if r0 == 0:
+        raise ConfigurationError("CIRCLE: the centre is the start point (radius 0)")
+    a0, a1 = math.atan2(sy - cy, sx - cx), math.atan2(ey - cy, ex - cx)
+    sweep = (a1 - a0) * direction % (2 * math.pi)
+    if sweep < 1e-12 and item.centre is not None:
+        sweep = 2 * math.pi  # end = start about a centre: a full circle
+    return Arc((cx, cy), a0, direction * sweep, r0, r1)
+
+
+def compile_circle(item: CircleMove, current: dict[str, Fraction]) -> Segment:
+    """A CIRCLE move as a segment: the plane's axes on the arc, the others (and followers) linearly along it."""
+    _check_axes(item.targets, current, "CIRCLE move")
+    first, second = item.plane
+    for axis in item.plane:
+        current.setdefault(axis, Fraction(0))
+    start = (current[first], current[second])
+    end = (item.targets.get(first, current[first]), item.targets.get(second, current[second]))
+    arc = _arc(item, start, end)
+    linear = {a: t for a, t in item.targets.items() if a not in item.plane}
+    arc_length = abs(arc.sweep) * (arc.radius0 + arc.radius1) / 2
+    distance = Fraction(math.sqrt(arc_length**2 + sum(float(t - current[a]) ** 2 for a, t in linear.items())))
+    speed = item.feedrate / 1000 if item.feedrate is not None else None
+    profile = Profile.plan(distance, ta_ms=item.ta_ms, ts_ms=item.ts_ms, speed=speed, tm_ms=item.tm_ms)
+    paths: tuple[Path, ...] = (CirclePath(first, start[0], end[0], profile, arc, 0),
+                               CirclePath(second, start[1], end[1], profile, arc, 1))
+    paths += tuple(AxisPath(a, current[a], t, profile) for a, t in linear.items())
+    current.update({first: end[0], second: end[1], **linear})
+    return Segment(False, profile.total_ms * UNITS_PER_MS, paths + _followers(item.followers, profile, current))
+
+
+def compile_segmented(item: Segmented, current: dict[str, Fraction]) -> Segment:
+    """A move of a kinematic coordinate system: its axes as usual, its motors through ``inverse`` every segment."""
+    before = dict(current)
+    inner = compile_item(item.item, current)
+    total = inner.duration_units / UNITS_PER_MS
+    steps = max(1, math.ceil(total / item.segment_ms)) if total > 0 else 1
+    taus = [min(total, item.segment_ms * j) for j in range(1, steps + 1)]
+    axes = {a: p for a, p in before.items() if not a.startswith("#")}
+    samples: dict[str, list[tuple[Fraction, Fraction]]] = {}
+    for tau in taus:
+        positions = dict(axes)
+        positions.update({p.axis: Fraction(p.position(tau)) for p in inner.paths})
+        for motor, counts in item.inverse(positions).items():
+            samples.setdefault(motor, []).append((tau, counts))
+    motors = tuple(SampledPath(motor, before.get(motor, Fraction(0)), tuple(points))
+                   for motor, points in samples.items())
+    current.update({p.axis: p.target for p in motors})
+    return Segment(inner.real_time, inner.duration_units, inner.paths + motors)
 
 
 def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> list[Segment]:
@@ -268,73 +404,3 @@ def compile_items(items: Iterable[Item], positions: Mapping[str, Fraction]) -> l
     return [compile_item(item, current) for item in items]
 
 
-@dataclass
-class ProgramRunner:
-    """Runs compiled segments, advanced once per servo cycle.
-
-    Segments may be appended while it runs (a motion program calculates ahead): the list is
-    shared with a second runner advanced by another clock (the coordinate system's ideal,
-    master-derived one). A segment that ends with nothing queued after it loses its overrun.
-
-    Parameters
-    ----------
-    segments : list of Segment
-        The program's segments (appended to as the program is calculated).
-    positions : mapping
-        Starting position of every axis of the coordinate system [axis units].
-    """
-
-    segments: list[Segment]
-    positions: Mapping[str, Fraction]
-    index: int = 0
-    local_units: Fraction = Fraction(0)
-    _held: dict[str, Fraction] = field(init=False)
-
-    def __post_init__(self) -> None:
-        self._held = dict(self.positions)
-
-    @classmethod
-    def of(cls, items: Iterable[Item], positions: Mapping[str, Fraction]) -> ProgramRunner:
-        """A runner over ``items`` compiled from ``positions``."""
-        return cls(compile_items(items, positions), positions)
-
-    @property
-    def done(self) -> bool:
-        """True once every queued segment has finished."""
-        return self.index >= len(self.segments)
-
-    @property
-    def in_dwell(self) -> bool:
-        """True while the current segment is a DWELL."""
-        return not self.done and self.segments[self.index].real_time
-
-    def queued_ahead(self) -> int:
-        """Segments not finished yet (the current one included) that take time or wait in real time."""
-        return sum(1 for s in self.segments[self.index:] if s.real_time or s.duration_units > 0)
-
-    def advance(self, timebase_units: int, real_units: int) -> None:
-        """Advance by one servo cycle: ``timebase_units`` (time base) or ``real_units`` (I10) in a dwell."""
-        if self.done:
-            return
-        segment = self.segments[self.index]
-        self.local_units = max(Fraction(0), self.local_units + (real_units if segment.real_time else timebase_units))
-        while self.local_units >= segment.duration_units:
-            leftover = self.local_units - segment.duration_units
-            for path in segment.paths:
-                self._held[path.axis] = path.target
-            self.index += 1
-            if self.done:
-                self.local_units = Fraction(0)
-                return
-            carry = not segment.real_time and not self.segments[self.index].real_time
-            segment = self.segments[self.index]
-            self.local_units = leftover if carry else Fraction(0)
-
-    def position(self, axis: str) -> Fraction:
-        """Commanded position of ``axis`` now [axis units]."""
-        if not self.done:
-            segment = self.segments[self.index]
-            for path in segment.paths:
-                if path.axis == axis:
-                    return path.position(self.local_units / UNITS_PER_MS)
-        return self._held.get(axis, Fraction(0))

@@ -18,13 +18,17 @@ acceleration ``a = v / (A - TS)`` the distance into a ramp is
     TS <= tau <= A - TS    a TS^2 / 6 + a TS (tau - TS) / 2 + a (tau - TS)^2 / 2
     A - TS <= tau <= A     v tau - v A / 2 + ramp(A - tau)
 
-All in :class:`~fractions.Fraction`: positions are exact functions of the elapsed time.
+All in :class:`~fractions.Fraction`: positions are exact functions of the elapsed time. The same
+function as pieces of polynomials (:meth:`Profile.pieces`) is what the servo cycle evaluates, in
+integers (:mod:`.pieces`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+
+from cosim.controllers.pmac.pieces import Piece, Poly, scale, shift
 
 
 @dataclass(frozen=True)
@@ -119,3 +123,38 @@ class Profile:
             return a * s / 2 + a * (rest - s)
         tail = big_a - rest
         return v - a * tail * tail / (2 * s)
+
+    def _ramp_pieces(self) -> list[tuple[Fraction, bool, Poly]]:
+        """:meth:`_ramp` as ``(bound, closed, poly)`` over ``0 <= tau < A`` (the last bound is A, open)."""
+        v, big_a, s = self.speed, self.accel_ms, self.ts_ms
+        zero = Fraction(0)
+        if s == 0:
+            return [(big_a, False, (zero, zero, v / (2 * big_a)))]
+        a = v / (big_a - s)
+        # a s^2/6 + a s (tau - s)/2 + a (tau - s)^2/2, expanded
+        middle = (a * s * s / 6 - a * s * s / 2 + a * s * s / 2, a * s / 2 - a * s, a / 2)
+        # v tau - v A/2 + a (A - tau)^3/(6 s)
+        end = scale(shift((zero, zero, zero, a / (6 * s)), big_a, -1), Fraction(1), -v * big_a / 2)
+        end = (end[0], end[1] + v, end[2], end[3])
+        return [(s, True, (zero, zero, zero, a / (6 * s))), (big_a - s, True, middle), (big_a, False, end)]
+
+    def pieces(self) -> list[Piece]:
+        """:meth:`travelled` as polynomial pieces in first-match order (see :mod:`.pieces`)."""
+        zero = Fraction(0)
+        total = self.total_ms
+        if self.distance == 0:
+            return [Piece(None, False, (zero,))]
+        out = [Piece(zero, True, (zero,))]
+        v, big_a = self.speed, self.accel_ms
+        if big_a == 0:
+            return [*out, Piece(total, False, (zero, v)), Piece(None, False, (self.distance,))]
+        out += [Piece(bound, closed, poly) for bound, closed, poly in self._ramp_pieces()]
+        out.append(Piece(self.move_ms, True, (-v * big_a / 2, v)))
+        # distance - ramp(total - tau): the ramp's pieces mirrored, last piece first
+        ramp = self._ramp_pieces()
+        for index in range(len(ramp) - 1, -1, -1):
+            _bound, _closed, poly = ramp[index]
+            upper = total - ramp[index - 1][0] if index > 0 else total
+            out.append(Piece(upper, False, scale(shift(poly, total, -1), Fraction(-1), self.distance)))
+        out.append(Piece(None, False, (self.distance,)))
+        return out

@@ -1,9 +1,10 @@
 """The programs of a PMAC: loading text, online commands, starting motion programs, scanning PLCs.
 
-:class:`Programs` holds a controller's motion programs (``PROG n``) and PLC programs (``PLC n``),
-its variables (:class:`~cosim.controllers.pmac.mvars.Memory`) and the host's command session, and
-runs online commands (``&1 B1 R``, ``%50``, ``H``, ``I8008=$9F8018``, ``ENABLE PLC 1``, ...)
-whether they come from a file, from the machine's command schedule or from a ``CMD"..."``.
+:class:`Programs` holds a controller's motion programs (``PROG n``), PLC programs (``PLC n``),
+kinematic programs (``FORWARD``/``INVERSE`` per coordinate system), its variables
+(:class:`~cosim.controllers.pmac.mvars.Memory`) and the host's command session, and runs online
+commands (``&1 B1 R``, ``%50``, ``H``, ``I8008=$9F8018``, ``ENABLE PLC 1..3``, ``^A``, ...) whether they
+come from a file, from the machine's command schedule or from a ``CMD"..."`` (see :mod:`.commands`).
 
 Scan model
 ----------
@@ -11,84 +12,83 @@ Scan model
   :mod:`cosim.controllers.pmac.interpreter`): after the conversion table, before and after the
   moves advance; statements there see the table as this cycle left it.
 * **PLC 0** runs in the foreground: one scan every servo cycle, after the coordinate systems
-  (the real-time interrupt, modelled at every servo cycle: I8 = 0).
+  (the real-time interrupt, modelled at every servo cycle: I8 is not modelled).
 * **PLC 1..31** run in the background, between servo interrupts: every enabled one is scanned
   once, in number order, at ``offset + k * period`` (``plc_scan_period``, default 200 us, and
-  ``plc_scan_offset``, default 0; priority HOST, after the servo tasks of the same instant). The
-  period stands for the background cycle time, which on a real controller depends on its load:
-  tens of microseconds when lightly loaded, milliseconds under a heavy load.
+  ``plc_scan_offset``, default 0), with priority :data:`BACKGROUND`: after every host action of the
+  same instant (``[[command]]`` lines, scripts), before outputs settle and samples are taken. The
+  period stands for the background cycle time, which on a real controller depends on its load.
+* **Quiet scans are not repeated** (the design that keeps a PMAC run fast): when a background round
+  changed nothing (no variable got a new value, no command, no output) and read nothing that changes
+  by itself (an encoder or capture register, a table result, a countdown timer), and every PLC
+  stopped where it started, the next rounds would do exactly the same until something a PLC can
+  read changes (any write with a new value, an M-variable definition, ENABLE/DISABLE, the triggered
+  entry's method digit turning to running). Those rounds are not run. Without plants that watch
+  their outputs (no kernel look-ahead), not even their instants are scheduled: the background
+  waits for the change and scans again at the first grid instant at or after it -- the instant and
+  the result a scan of every grid instant would have given. With a watched plant (a Conveyor's
+  registration mark) every grid instant keeps its event, because the kernel advances that plant to
+  each event instant and its encoder edges are located from those steps: removing the instants
+  would move edge instants by float rounding (a 1/256-count change of the master position in the
+  flying shear), so the trace would no longer be the one of every instant scanned. Skipped scans are
+  counted in :attr:`Programs.scans`.
 
-So the time between a motion program's freeze of a triggered time-base entry and the PLC's
-arming of it is at most one scan period: with a period shorter than the servo period (a light
-load) the PLC can arm before any servo cycle has seen the entry frozen, and without a dummy read
-of the capture register a stale capture starts the motion (the Turbo manual's warning); with a
-period of several servo cycles the frozen entry is most likely seen (its read of the capture
-register re-arms the capture), but never certainly: the arm may come in the first interval.
+So the time between a motion program's freeze of a triggered time-base entry and the PLC's arming
+of it is at most one scan period (the stale-capture hazard of the Turbo manual depends on it; see
+``docs/pmac.md``).
 
 PLC programs are disabled after ``OPEN PLC`` and start with ``ENABLE PLC n`` (from the top);
-``DISABLE PLC n`` stops one (I5 is not modelled: every PLC may run).
+``DISABLE PLC n`` stops one, ``PAUSE PLC n`` / ``RESUME PLC n`` stop and go on where it was
+(I5 is stored, not modelled: every enabled PLC runs).
 """
 
 from __future__ import annotations
 
-from collections.abc import Generator, Iterable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Generator, Iterable
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from pathlib import Path
+from typing import Any
 
 from cosim import validate
-from cosim.controllers.pmac.interpreter import MotionModes, MotionProgram, PlcProgram, evaluate
+from cosim.controllers.pmac import ivartable
+from cosim.controllers.pmac.bus import Controller
+from cosim.controllers.pmac.commands import Commands
+from cosim.controllers.pmac.interpreter import (
+    KINEMATIC_AXES,
+    Compiled,
+    Context,
+    MotionModes,
+    MotionProgram,
+    PlcProgram,
+    Session,
+    run_to_end,
+)
 from cosim.controllers.pmac.mvars import Memory
 from cosim.controllers.pmac.nodes import (
     Assign,
     Begin,
     Call,
-    Clear,
-    Close,
     Cmd,
+    CodeCall,
     CsSelect,
-    Disable,
-    Enable,
-    Hold,
-    MDefine,
-    MotorDef,
-    MotorSelect,
-    OpenBuffer,
-    Percent,
+    MoveStmt,
+    PlcControl,
     Pos,
-    Query,
-    Run,
     Stmt,
     Var,
     constant,
     located,
 )
-from cosim.controllers.pmac.program import (
-    Buffer,
-    Code,
-    MoveStmt,
-    compile_buffer,
-    parse_text,
-    stmt_variables,
-)
-from cosim.controllers.pmac.statements import (
-    parse_line,
-)
+from cosim.controllers.pmac.program import CODE_PROGRAMS, Buffer, Code, compile_buffer, parse_text, stmt_variables
+from cosim.controllers.pmac.syntax import parse_line
+from cosim.job import JobState
 from cosim.timebase import Priority
-
-if TYPE_CHECKING:
-    from cosim.controllers.pmac.machine import Pmac
 
 #: Default background (PLC) scan period [ns]: a lightly loaded controller.
 PLC_SCAN_PERIOD_NS = 200_000
-
-
-@dataclass
-class Session:
-    """Modal addressing of a command source: the coordinate system (``&n``) and motor (``#n``)."""
-
-    cs: int = 1
-    motor: int = 1
+#: Priority of the background scans: after host actions (HOST), before SETTLE and SAMPLE.
+BACKGROUND = Priority.HOST + 5
 
 
 @dataclass(frozen=True)
@@ -99,9 +99,8 @@ class CommandLine:
     statements: tuple[Stmt, ...]
 
 
-@dataclass
-class Programs:
-    """Motion and PLC programs, variables and command sessions of one controller.
+class Programs(Commands):
+    """Motion, PLC and kinematic programs, variables and command sessions of one controller.
 
     Parameters
     ----------
@@ -109,23 +108,37 @@ class Programs:
         The controller.
     """
 
-    pmac: Pmac
-    memory: Memory = field(init=False)
-    motion: dict[int, Code] = field(default_factory=dict)
-    plcs: dict[int, PlcProgram] = field(default_factory=dict)
-    enabled: set[int] = field(default_factory=set)
-    host: Session = field(default_factory=Session)
-    selected: dict[int, int] = field(default_factory=dict)
-    modes: dict[int, MotionModes] = field(default_factory=dict)
-    scan_period: int = 0
-    scan_offset: int = 0
-    scans: int = 0
-    _lines: dict[tuple[str, int], list[tuple[Stmt, ...]]] = field(default_factory=dict)
-    _uses: list[tuple[int, int, Pos]] = field(default_factory=list)
+    def __init__(self, pmac: Controller) -> None:
+        self.pmac = pmac
+        self.memory = Memory(pmac)
+        self.memory.on_change = self.wake
+        self.memory.on_unmodelled = self.not_modelled
+        self.motion: dict[int, Code] = {}
+        self.kinematic: dict[tuple[str, int], Code] = {}
+        self.plcs: dict[int, PlcProgram] = {}
+        self.enabled: set[int] = set()
+        self.paused: set[int] = set()
+        self.host = Session()
+        self.selected: dict[int, int] = {}
+        self.modes: dict[int, MotionModes] = {}
+        self.running: dict[int, MotionProgram] = {}
+        self.scan_period = pmac.sim.ticks(PLC_SCAN_PERIOD_NS, "ns")
+        self.scan_offset = 0
+        self._scans_run = 0
+        self._dormant_from: int | None = None  # grid index of the first scan not run while waiting
+        self._wake_event: Any = None
+        self._dirty = True
+        self._lines: dict[tuple[str, int], list[tuple[Stmt, ...]]] = {}
+        self._uses: list[tuple[int, int, Pos]] = []
+        self._compiled: dict[int, Compiled] = {}
 
-    def __post_init__(self) -> None:
-        self.memory = Memory(self.pmac)
-        self.scan_period = self.pmac.sim.ticks(PLC_SCAN_PERIOD_NS, "ns")
+    # -- compiled code -------------------------------------------------------------------------
+    def compiled(self, code: Code) -> Compiled:
+        """``code`` prepared for running (kept: the code object stays alive as long as this entry)."""
+        found = self._compiled.get(id(code))
+        if found is None or found.code is not code:
+            found = self._compiled[id(code)] = Compiled(code)
+        return found
 
     # -- loading ---------------------------------------------------------------------------
     def install(self, buffer: Buffer) -> None:
@@ -139,26 +152,32 @@ class Programs:
         self._lines[key] = lines
         if buffer.kind == "PROG":
             self.motion[buffer.number] = code
+        elif buffer.kind in ("FORWARD", "INVERSE"):
+            self.kinematic[(buffer.kind, buffer.number)] = code
+        elif buffer.kind == "ROTARY":
+            self.not_modelled("OPEN ROTARY", f"{sum(len(line) for line in lines)} statements", str(buffer.pos))
         elif buffer.number in self.plcs:
             self.plcs[buffer.number].restart(code)
             self.enabled.discard(buffer.number)
         else:
-            self.plcs[buffer.number] = PlcProgram(code, self, Session())
+            self.plcs[buffer.number] = PlcProgram(code, self)
 
-    def load(self, text: str, *, source: str) -> None:
+    def load(self, text: str, *, source: str, path: Path | None = None, defines: dict[str, str] | None = None,
+             search: Iterable[Path] = ()) -> None:
         """Apply a PMAC file: its conversion-table lines first (as :meth:`Pmac.load_setup`), then in order."""
-        parsed = parse_text(text, source=source)
+        parsed = parse_text(text, source=source, path=path, defines=defines, search=tuple(search))
         table_lines: dict[int, int] = {}
         where: dict[int, str] = {}
         used: set[int] = set()
         if not self.pmac.table.entries:
             for index, item in enumerate(parsed.items):
-                is_line = isinstance(item, Assign) and item.var.kind == "I" and item.var.number >= 8000
-                value = constant(item.expr) if isinstance(item, Assign) and is_line else None
-                if isinstance(item, Assign) and value is not None:  # an integer: checked when parsed
-                    table_lines[item.var.number - 8000] = int(value)
-                    where[item.var.number - 8000] = str(item.pos)
-                    used.add(index)
+                if (isinstance(item, Assign) and isinstance(item.var, Var) and item.var.kind == "I"
+                        and item.var.number >= ivartable.ECT_FIRST and item.expr is not None):
+                    value = constant(item.expr)
+                    if value is not None:  # an integer: checked when parsed
+                        table_lines[item.var.number - ivartable.ECT_FIRST] = int(value)
+                        where[item.var.number - ivartable.ECT_FIRST] = str(item.pos)
+                        used.add(index)
         if table_lines:
             self.pmac.build_table(table_lines, where=where)
         for index, item in enumerate(parsed.items):
@@ -173,42 +192,11 @@ class Programs:
         """Parse a line of online commands (checked as far as one line allows)."""
         statements = parse_line(text, context="online", source=source, line=line)
         for stmt in statements:
-            if isinstance(stmt, OpenBuffer | Clear | Close | MotorDef):
+            if stmt.name in ("OPENBUFFER", "CLEAR", "CLOSE", "MOTORDEF", "MOTORKINEMATIC"):
                 raise stmt.pos.error(f"{stmt.name} belongs in a file loaded before the run, not in a timed command")
         return CommandLine(text, tuple(statements))
 
-    # -- online commands ---------------------------------------------------------------------
-    def execute(self, statements: Iterable[Stmt], session: Session) -> None:
-        """Run online commands with ``session``'s addressing."""
-        pmac = self.pmac
-        for stmt in statements:
-            with located(stmt.pos):
-                if isinstance(stmt, CsSelect):
-                    session.cs = stmt.number
-                elif isinstance(stmt, MotorSelect):
-                    session.motor = stmt.number
-                elif isinstance(stmt, MotorDef):
-                    pmac.define_motor(stmt.motor, cs=session.cs, axis=stmt.axis, counts_per_unit=stmt.scale,
-                                      where=str(stmt.pos))
-                elif isinstance(stmt, Begin):
-                    self.begin(session.cs, stmt.number, stmt.pos)
-                elif isinstance(stmt, Run):
-                    self.run(session.cs, stmt.pos)
-                elif isinstance(stmt, Hold):
-                    pmac.coordinate_system(session.cs).hold()
-                elif isinstance(stmt, Percent):
-                    pmac.command_percent(session.cs, stmt.value)
-                elif isinstance(stmt, Assign):
-                    self.memory.write(stmt.var, evaluate(stmt.expr, self), stmt.pos)
-                elif isinstance(stmt, MDefine):
-                    self.memory.define(stmt)
-                elif isinstance(stmt, Query):
-                    self.memory.read(stmt.var)
-                elif isinstance(stmt, Enable | Disable):
-                    self.enable(stmt.plcs, isinstance(stmt, Enable), stmt.pos)
-                else:
-                    raise stmt.pos.error(f"{stmt.name} cannot be issued here")
-
+    # -- what programs ask (interpreter.Host) --------------------------------------------------
     def program(self, number: int, pos: Pos) -> Code:
         """Motion program ``number`` (a jump into nothing is an error naming ``pos``)."""
         code = self.motion.get(number)
@@ -217,6 +205,68 @@ class Programs:
             raise pos.error(f"PROG {number} does not exist (motion programs: {known})")
         return code
 
+    def ivar(self, number: int) -> Fraction | int:
+        return self.pmac.get_ivar(number)
+
+    def fault(self, reason: str) -> None:
+        """A motion program stopped on an error: the job stops with the reason."""
+        self.pmac.job.stop(JobState.ERROR, reason)
+
+    def not_modelled(self, name: str, value: object, where: str) -> None:
+        """List a setting or command that is accepted and kept but does not act."""
+        self.pmac.sim.notes.not_modelled(self.pmac.device, name, value, where=where)
+
+    def console(self, source: str, text: str) -> None:
+        """A line on the run's console (SEND, DISPLAY) from ``pmac.<source>``."""
+        sim = self.pmac.sim
+        sim.trace.write_line(sim.now, f"{self.pmac.device}.{source}", text)
+
+    def check_axis(self, cs_number: int, axis: str, pos: Pos) -> None:
+        """A move on ``axis`` needs a motor assigned to it in the coordinate system."""
+        axes = self.pmac.motor_axes(cs_number)
+        if axis not in axes:
+            raise pos.error(f"axis {axis} is not defined in coordinate system {cs_number} (its axes: "
+                            f"{', '.join(sorted(axes)) or 'none'}; define one with &{cs_number} #n->{axis})")
+
+    def rapid_parameters(self, cs_number: int, axis: str, pos: Pos) -> tuple[Fraction, Fraction, Fraction]:
+        """RAPID speed [units/ms], TA and TS [ms] of ``axis`` (its motor's Ixx22, Ixx20, Ixx21)."""
+        with located(pos):
+            return self.pmac.rapid_parameters(cs_number, axis)
+
+    def kinematics(self, cs_number: int, targets: dict[str, Fraction], pos: Pos) -> dict[str, Fraction]:
+        """Counts of the coordinate system's ``#n->I`` motors at axis positions ``targets``: ``OPEN INVERSE``."""
+        motors = self.pmac.inverse_motors(cs_number)
+        if not motors or self.pmac.get_ivar(5000 + 100 * cs_number + 50) != 1:
+            return {}
+        code = self.kinematic.get(("INVERSE", cs_number)) or self.kinematic.get(("INVERSE", 0))
+        if code is None:
+            raise pos.error(f"coordinate system {cs_number} has motors #n->I ({', '.join(f'#{m}' for m in motors)}) "
+                            f"and I{5000 + 100 * cs_number + 50}=1, but no OPEN INVERSE program")
+        memory = self.memory
+        for index, axis in enumerate(KINEMATIC_AXES, 1):
+            if axis in targets:
+                memory.write("Q", index, targets[axis], cs_number, pos)
+        run_to_end(code, self, cs=cs_number)
+        return {f"#{m}": Fraction(memory.p[m]) for m in motors}
+
+    def forward(self, cs_number: int, pos: Pos) -> None:
+        """``OPEN FORWARD``: motor positions in P1..P32, axis positions out of Q1..Q9 (R, PMATCH; Isx50 = 1)."""
+        if self.pmac.get_ivar(5000 + 100 * cs_number + 50) != 1:
+            return
+        code = self.kinematic.get(("FORWARD", cs_number)) or self.kinematic.get(("FORWARD", 0))
+        if code is None:
+            return
+        memory = self.memory
+        cs = self.pmac.coordinate_system(cs_number)
+        for number, motor in self.pmac.motors.items():
+            if motor.cs is cs:
+                memory.write("P", number, Fraction(*motor.cmd_ratio), cs_number, pos)
+        run_to_end(code, self, cs=cs_number)
+        positions = {axis: Fraction(memory.read("Q", index, cs_number, pos))
+                     for index, axis in enumerate(KINEMATIC_AXES, 1) if axis in cs.axes}
+        cs.set_positions(positions)
+
+    # -- starting motion programs ------------------------------------------------------------------
     def begin(self, cs_number: int, number: int, pos: Pos) -> None:
         """``&x Bn``: point coordinate system x at the top of motion program n."""
         code = self.program(number, pos)
@@ -242,36 +292,105 @@ class Programs:
             raise pos.error(f"R: coordinate system {cs_number} has no program to run (point it at one with B n)")
         modes = self.modes.get(cs_number)
         if modes is None:
-            modes = self.modes[cs_number] = MotionModes(ta_ms=Fraction(cs.ix87), ts_ms=Fraction(cs.ix88),
-                                                        feedrate=Fraction(cs.ix89))
-        cs.run_feeder(MotionProgram(self.program(number, pos), self, Session(cs=cs_number), modes))
+            base = 5000 + 100 * cs_number
+            modes = self.modes[cs_number] = MotionModes(ta_ms=Fraction(self.pmac.get_ivar(base + 87)),
+                                                        ts_ms=Fraction(self.pmac.get_ivar(base + 88)),
+                                                        feedrate=Fraction(self.pmac.get_ivar(base + 89)))
+        self.forward(cs_number, pos)
+        program = MotionProgram(self.program(number, pos), self, cs_number, modes)
+        self.running[cs_number] = program
+        cs.run_feeder(program, name=f"CS{cs_number} PROG {number}")
 
-    def enable(self, numbers: Sequence[int], on: bool, pos: Pos) -> None:
-        """``ENABLE PLC n`` (from the top) or ``DISABLE PLC n``."""
-        for number in numbers:
+    def abort(self, cs_number: int, how: str, pos: Pos) -> None:
+        """``A`` (abort), ``K`` (kill), ``Q`` (quit), ``/`` or ``\\`` (stop): the program stops now."""
+        cs = self.pmac.coordinate_system(cs_number)
+        if cs.program_done:
+            return
+        self.running.pop(cs_number, None)
+        reason = f"{how} of coordinate system {cs_number} at {pos}: its program stopped"
+        cs.abort(reason)
+        self.not_modelled(f"&{cs_number}{how}", "stops at once (the controller decelerates at Ixx15)", str(pos))
+        self.pmac.job.stop(JobState.ABORTED, reason)
+
+    # -- PLCs ---------------------------------------------------------------------------------
+    def plc_control(self, stmt: PlcControl) -> None:
+        """``ENABLE``/``DISABLE``/``PAUSE``/``RESUME`` ``PLC`` n,m..k."""
+        for number in stmt.plcs:
             plc = self.plcs.get(number)
             if plc is None:
                 known = ", ".join(str(n) for n in sorted(self.plcs)) or "none"
-                raise pos.error(f"PLC {number} does not exist (PLC programs: {known})")
-            if on and number not in self.enabled:
+                raise stmt.pos.error(f"PLC {number} does not exist (PLC programs: {known})")
+            if stmt.verb == "ENABLE" and number not in self.enabled:
                 plc.restart(plc.context.code)
                 self.enabled.add(number)
-            elif not on:
+                self.paused.discard(number)
+            elif stmt.verb == "DISABLE":
                 self.enabled.discard(number)
+            elif stmt.verb == "PAUSE":
+                self.paused.add(number)
+            elif stmt.verb == "RESUME":
+                self.paused.discard(number)
+        self.wake()
 
-    # -- program checks ----------------------------------------------------------------------
-    def check_axis(self, cs_number: int, axis: str, pos: Pos) -> None:
-        """A move on ``axis`` needs a motor assigned to it in the coordinate system."""
-        axes = self.pmac.motor_axes(cs_number)
-        if axis not in axes:
-            raise pos.error(f"axis {axis} is not defined in coordinate system {cs_number} (its axes: "
-                            f"{', '.join(sorted(axes)) or 'none'}; define one with &{cs_number} #n->{axis})")
+    def configure_scan(self, *, period: int | None = None, offset: int | None = None) -> None:
+        """Background scan period and offset [ticks] (see the module docstring)."""
+        if period is not None:
+            self.scan_period = validate.integer(period, "plc_scan_period [ticks]", low=1)
+        if offset is not None:
+            self.scan_offset = validate.integer(offset, "plc_scan_offset [ticks]", low=0)
 
-    def rapid_parameters(self, cs_number: int, axis: str, pos: Pos) -> tuple[Fraction, Fraction, Fraction]:
-        """RAPID speed [units/ms], TA and TS [ms] of ``axis`` (its motor's Ixx22, Ixx20, Ixx21)."""
-        with located(pos):
-            return self.pmac.rapid_parameters(cs_number, axis)
+    @property
+    def scans(self) -> int:
+        """Background scan rounds so far, those that were run and those skipped as repeats of a quiet one."""
+        if self._dormant_from is None:
+            return self._scans_run
+        return self._scans_run + max(0, self._grid_index(self.pmac.sim.now) - self._dormant_from)
 
+    def _grid_index(self, t: int) -> int:
+        """Index of the first background instant at or after ``t``."""
+        return max(0, -(-(t - self.scan_offset) // self.scan_period))
+
+    def wake(self) -> None:
+        """Something a PLC can read has changed: the background scans again."""
+        self._dirty = True
+        event = self._wake_event
+        if event is not None:
+            self._wake_event = None
+            event.succeed()
+
+    def foreground(self) -> None:
+        """PLC 0, once per servo cycle."""
+        if 0 in self.enabled and 0 not in self.paused:
+            self.plcs[0].scan()
+
+    def background(self) -> Generator[Any, Any, None]:
+        """The background scans of PLC 1..31 (a SimPy process)."""
+        sim = self.pmac.sim
+        period, offset = self.scan_period, self.scan_offset
+        k = self._grid_index(sim.now)
+        quiet = False
+        while True:
+            yield sim.at(offset + k * period, BACKGROUND)
+            self._scans_run += 1
+            k += 1
+            if quiet and not self._dirty:
+                continue  # a repeat of the quiet round before: nothing to do
+            self._dirty = False
+            quiet = True
+            for number in sorted(self.enabled):
+                if number != 0 and number in self.enabled and number not in self.paused:
+                    quiet = self.plcs[number].scan() and quiet
+            if quiet and not sim.env.look_aheads:  # the next rounds would repeat this one: wait for a change
+                self._dormant_from = k
+                self._wake_event = sim.env.event()
+                yield self._wake_event
+                resume = max(k, self._grid_index(sim.now))
+                self._scans_run += resume - k
+                self._dormant_from = None
+                k = resume
+                quiet = False
+
+    # -- checks before the run ----------------------------------------------------------------
     def check_program_axes(self, cs_number: int, code: Code) -> None:
         """Every axis that ``code`` (and the programs it calls) moves is defined in the coordinate system."""
         seen: set[int] = set()
@@ -295,13 +414,18 @@ class Programs:
     def _check_statements(self, statements: Iterable[Stmt], session: Session) -> None:
         for stmt in statements:
             if isinstance(stmt, CsSelect):
-                session.cs = stmt.number
+                number = constant(stmt.number)
+                if number is not None:
+                    session.cs = int(number)
             elif isinstance(stmt, Begin):
-                self.check_program_axes(session.cs, self.program(stmt.number, stmt.pos))
-            elif isinstance(stmt, Enable | Disable):
+                number = constant(stmt.number)
+                if number is not None:
+                    self.check_program_axes(session.cs, self.program(int(number), stmt.pos))
+            elif isinstance(stmt, PlcControl):
                 for number in stmt.plcs:
                     if number not in self.plcs:
-                        self.enable((number,), True, stmt.pos)  # raises: no such PLC
+                        known = ", ".join(str(n) for n in sorted(self.plcs)) or "none"
+                        raise stmt.pos.error(f"PLC {number} does not exist (PLC programs: {known})")
             for var in stmt_variables(stmt):
                 self._check_var(var)
 
@@ -311,49 +435,32 @@ class Programs:
 
     def check(self) -> None:
         """Before the servo clock starts: every jump, program, PLC, axis and M-variable is there."""
+        listed: set[int] = set()
         for definition in self.memory.definitions.values():
-            self.memory.check_definition(definition)
-        for code in [*self.motion.values(), *(plc.context.code for plc in self.plcs.values())]:
+            if id(definition) not in listed:
+                listed.add(id(definition))
+                self.memory.check_definition(definition)
+        codes = [*self.motion.values(), *(plc.context.code for plc in self.plcs.values()), *self.kinematic.values()]
+        for code in codes:
             for stmt in code.statements():
                 if isinstance(stmt, Call):
                     self.program(stmt.program, stmt.pos)
+                elif isinstance(stmt, CodeCall):
+                    self.program(CODE_PROGRAMS[stmt.letter], stmt.pos)
                 elif isinstance(stmt, Cmd):
                     self._check_statements(stmt.commands, Session())
-                elif isinstance(stmt, Enable | Disable):
+                elif isinstance(stmt, PlcControl):
                     self._check_statements((stmt,), Session())
             for var in code.variables():
                 self._check_var(var)
         for cs_number, number, _pos in self._uses:
             self.check_program_axes(cs_number, self.motion[number])
 
-    # -- running -----------------------------------------------------------------------------
-    def configure_scan(self, *, period: int | None = None, offset: int | None = None) -> None:
-        """Background scan period and offset [ticks] (see the module docstring)."""
-        if period is not None:
-            self.scan_period = validate.integer(period, "plc_scan_period [ticks]", low=1)
-        if offset is not None:
-            self.scan_offset = validate.integer(offset, "plc_scan_offset [ticks]", low=0)
-
-    def foreground(self) -> None:
-        """PLC 0, once per servo cycle."""
-        if 0 in self.enabled:
-            self.plcs[0].scan()
-
-    def background(self) -> Generator[Any, Any, None]:
-        """The background scans of PLC 1..31 (a SimPy process)."""
-        sim = self.pmac.sim
-        period, offset = self.scan_period, self.scan_offset
-        k = max(0, -(-(sim.now - offset) // period))
-        while True:
-            yield sim.at(offset + k * period, Priority.HOST)
-            self.scans += 1
-            for number in sorted(self.enabled):
-                if number != 0 and number in self.enabled:
-                    self.plcs[number].scan()
-            k += 1
-
     def start(self) -> None:
         """Check everything and start the background scans (if there are PLC programs)."""
         self.check()
         if any(number != 0 for number in self.plcs):
             self.pmac.sim.process(self.background())
+
+
+__all__ = ["BACKGROUND", "PLC_SCAN_PERIOD_NS", "CommandLine", "Context", "Programs", "Session"]

@@ -17,16 +17,21 @@ and the largest closed-loop pole radius (stable at the servo rate if below 1).
 
 The DAC output is a 16-bit value (+-32767, about +-10 V); the controller state keeps running
 when the output saturates (no anti-windup).
+
+python-control (which pulls in scipy and matplotlib) is imported inside the functions that design a
+loop, never at module level: a run that designs no loop does not pay for it.
 """
 
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
+from pathlib import Path
 from typing import Any
 
-import control
 import numpy as np
 
 from cosim import validate
@@ -58,6 +63,8 @@ class MotorModel:
 
     def transfer_function(self) -> Any:
         """The continuous plant ``G(s)`` as a python-control transfer function."""
+        import control  # python-control (with scipy and matplotlib) only where a loop is designed
+
         return control.tf([self.gain_counts_per_s_per_bit], [self.tau_s, 1.0, 0.0])
 
 
@@ -147,9 +154,55 @@ def _closed_loop_bandwidth_hz(closed: Any, period_s: float) -> float:
     return 0.5 * (lo + hi) / (2 * math.pi)
 
 
+#: Revision of the design method: a change of :func:`design_pid` or :func:`cosim.couplings.servo.full_model_margins`
+#: that changes their numbers raises it, so designs kept on disk from before are not used.
+DESIGN_REVISION = 1
+
+
+def cached_design(kind: str, inputs: dict[str, Any], compute: Callable[[], dict[str, Any]]) -> dict[str, Any]:
+    """``compute()`` (a JSON-able dict of floats), kept on disk by its inputs: a loop is designed once per machine.
+
+    Designing imports python-control (scipy, matplotlib: a second or more of start-up); a design is
+    a deterministic function of its inputs, so it is stored in the user cache folder
+    (``platformdirs``; the key holds the inputs, :data:`DESIGN_REVISION` and python-control's
+    version) and read back bit for bit (JSON keeps floats exactly). A cache that cannot be read or
+    written is ignored.
+    """
+    import hashlib
+    import json
+    from importlib.metadata import version
+
+    key = json.dumps({"kind": kind, "inputs": inputs, "revision": DESIGN_REVISION,
+                      "control": version("control")}, sort_keys=True)
+    path = _cache_folder() / f"{kind}-{hashlib.sha256(key.encode()).hexdigest()[:32]}.json"
+    try:
+        stored = json.loads(path.read_text())
+        if stored.get("key") == key:
+            return dict(stored["value"])
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    value = compute()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        temporary = path.with_suffix(f".{os.getpid()}.tmp")
+        temporary.write_text(json.dumps({"key": key, "value": value}))
+        temporary.replace(path)
+    except OSError:
+        pass
+    return value
+
+
+def _cache_folder() -> Path:
+    from platformdirs import user_cache_path
+
+    from cosim import __version__
+
+    return user_cache_path("cosim", appauthor=False, version=__version__) / "servo-designs"
+
+
 def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integral_ratio: float = 10.0,
                derivative_filter_ratio: float = 10.0) -> PidDesign:
-    """Design the PID position loop for a stated bandwidth.
+    """Design the PID position loop for a stated bandwidth (kept on disk: :func:`cached_design`).
 
     Parameters
     ----------
@@ -168,11 +221,27 @@ def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integ
     PidDesign
     """
     validate.positive(period_s, "period_s", unit="s")
+    inputs = {"gain": float(motor.gain_counts_per_s_per_bit), "tau_s": float(motor.tau_s),
+              "period_s": float(period_s), "bandwidth_hz": float(bandwidth_hz),
+              "integral_ratio": float(integral_ratio), "derivative_filter_ratio": float(derivative_filter_ratio)}
     rate_hz = 1.0 / period_s
     validate.in_range(bandwidth_hz, "bandwidth_hz", low=0, low_open=True, high=rate_hz / 10,
                       allowed=f"0 < bandwidth <= servo rate / 10 = {rate_hz / 10:.1f} Hz")
     validate.in_range(integral_ratio, "integral_ratio", low=1, low_open=True)
     validate.in_range(derivative_filter_ratio, "derivative_filter_ratio", low=1, low_open=True)
+    value = cached_design("pid", inputs, lambda: _design(motor, period_s=period_s, bandwidth_hz=bandwidth_hz,
+                                                         integral_ratio=integral_ratio,
+                                                         derivative_filter_ratio=derivative_filter_ratio))
+    value["a"] = tuple(tuple(row) for row in value["a"])
+    value["b"], value["c"] = tuple(value["b"]), tuple(value["c"])
+    return PidDesign(**value)
+
+
+def _design(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integral_ratio: float,
+            derivative_filter_ratio: float) -> dict[str, Any]:
+    """The design itself, with python-control (see :func:`design_pid`)."""
+    import control  # python-control (with scipy and matplotlib) only where a loop is designed
+
     wc = 2 * math.pi * bandwidth_hz
     wi = wc / integral_ratio
     wf = min(derivative_filter_ratio * wc, math.pi / period_s / 2)
@@ -190,14 +259,14 @@ def design_pid(motor: MotorModel, *, period_s: float, bandwidth_hz: float, integ
     ki = kc * wi
     kp = kc * (1 + tau * wi) - ki / wf
     kd = kc * tau - kp / wf
-    return PidDesign(
+    return dict(
         period_s=period_s, kp=kp, ki=ki, kd=kd, derivative_filter_hz=wf / (2 * math.pi), crossover_hz=bandwidth_hz,
         bandwidth_hz=_closed_loop_bandwidth_hz(closed, period_s),
         gain_margin_db=float(20 * math.log10(gm)) if np.isfinite(gm) and gm > 0 else math.inf,
         phase_margin_deg=float(pm), max_pole_radius=radius,
-        a=tuple(tuple(float(v) for v in row) for row in np.asarray(ss.A)),
-        b=tuple(float(v) for v in np.asarray(ss.B).ravel()),
-        c=tuple(float(v) for v in np.asarray(ss.C).ravel()),
+        a=[[float(v) for v in row] for row in np.asarray(ss.A)],
+        b=[float(v) for v in np.asarray(ss.B).ravel()],
+        c=[float(v) for v in np.asarray(ss.C).ravel()],
         d=float(np.asarray(ss.D).ravel()[0]),
     )
 
@@ -213,12 +282,33 @@ class PidLoop:
     def __init__(self, design: PidDesign) -> None:
         self.design = design
         self._x = [0.0] * len(design.b)
+        self._rows = tuple(zip(design.a, design.b, strict=True))
 
     def update(self, error_counts: float) -> int:
-        """Following error [counts] in, DAC value [bits] out (clamped to +-32767)."""
+        """Following error [counts] in, DAC value [bits] out (clamped to +-32767).
+
+        ``u = C x + D e`` and ``x <- A x + B e``, each sum taken left to right from 0 (the same
+        floats in the same order whatever the state's size).
+        """
         d = self.design
         x = self._x
-        u = sum(ci * xi for ci, xi in zip(d.c, x, strict=True)) + d.d * error_counts
-        self._x = [sum(aij * xj for aij, xj in zip(row, x, strict=True)) + bi * error_counts
-                   for row, bi in zip(d.a, d.b, strict=True)]
+        if len(x) == 2:  # the designed PID's order: the same sums, unrolled
+            x0, x1 = x
+            (a00, a01), b0 = self._rows[0]
+            (a10, a11), b1 = self._rows[1]
+            c0, c1 = d.c
+            u = 0.0 + c0 * x0 + c1 * x1 + d.d * error_counts
+            self._x = [0.0 + a00 * x0 + a01 * x1 + b0 * error_counts, 0.0 + a10 * x0 + a11 * x1 + b1 * error_counts]
+            return max(-DAC_MAX, min(DAC_MAX, round(u)))
+        u = 0.0
+        for ci, xi in zip(d.c, x, strict=True):
+            u += ci * xi
+        u += d.d * error_counts
+        new = []
+        for row, bi in self._rows:
+            acc = 0.0
+            for aij, xj in zip(row, x, strict=True):
+                acc += aij * xj
+            new.append(acc + bi * error_counts)
+        self._x = new
         return max(-DAC_MAX, min(DAC_MAX, round(u)))

@@ -8,7 +8,7 @@ Accepted syntax, one or more assignments per line, case-insensitive::
 
 ``;`` starts a comment. The text is parsed by :func:`cosim.controllers.pmac.program.parse_text`
 (the grammar of every PMAC text), and each statement must be an assignment of a constant to an
-I-variable the model knows (:mod:`.ivars`), within its range; anything else is an error naming
+I-variable of the Turbo PMAC (:mod:`.ivartable`), within its range; anything else is an error naming
 ``file:line:column``. A full PMAC file (M-variables, motors, programs) is read by
 :meth:`cosim.controllers.pmac.machine.Pmac.load`.
 """
@@ -18,11 +18,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from cosim.controllers.pmac.ivars import check_ivar
-from cosim.controllers.pmac.nodes import (
-    Assign,
-    constant,
-)
+from cosim.controllers.pmac import ivartable
+from cosim.controllers.pmac.nodes import Assign, Var, constant
 from cosim.controllers.pmac.program import Buffer, parse_text
 
 
@@ -73,8 +70,9 @@ def parse_setup(text: str, *, source: str = "setup") -> tuple[Assignment, ...]:
     """
     assignments: list[Assignment] = []
     for item in parse_text(text, source=source).items:
-        value = constant(item.expr) if isinstance(item, Assign) and item.var.kind == "I" else None
-        if value is None or not isinstance(item, Assign):
+        value = constant(item.expr) if (isinstance(item, Assign) and isinstance(item.var, Var) and item.var.kind == "I"
+                                        and item.expr is not None) else None
+        if value is None or not isinstance(item, Assign) or not isinstance(item.var, Var):
             pos = item.pos
             line = text.removeprefix("\ufeff").splitlines()[pos.line - 1]
             word = "OPEN" if isinstance(item, Buffer) else (line[pos.column - 1:].split() or ["?"])[0]
@@ -82,6 +80,7 @@ def parse_setup(text: str, *, source: str = "setup") -> tuple[Assignment, ...]:
                             "I10=3713707 or I8010=$978008)")
         number = item.var.number
         exact = value.numerator if value.denominator == 1 else value
-        assignments.append(Assignment(number, check_ivar(number, exact, where=str(item.pos)), item.pos.line, source,
+        checked = ivartable.check(number, exact, where=str(item.pos))
+        assignments.append(Assignment(number, checked, item.pos.line, source,
                                       item.pos.column))
     return tuple(assignments)

@@ -118,6 +118,9 @@ class ServoClock:
         validate.integer(self.i10, "I10 (servo interrupt time)", low=1, high=REG_MAX, allowed=I10_ALLOWED)
         validate.integer(self.t0, "t0", low=0, high=1 << 62, allowed=f"integers 0..{1 << 62} ticks")
         validate.positive(self.ns_per_tick, "ns_per_tick")
+        period = self.period_ticks  # t(k) in integers: t0 + (k * numerator) // denominator
+        object.__setattr__(self, "_period_num", period.numerator)
+        object.__setattr__(self, "_period_den", period.denominator)
 
     @classmethod
     def from_period_ns(cls, period_ns: int, *, t0: int = 0, ns_per_tick: Fraction = Fraction(1)) -> ServoClock:
@@ -158,8 +161,7 @@ class ServoClock:
 
     def t(self, k: int) -> int:
         """Instant of servo interrupt ``k`` [ticks]: ``t0 + floor(k * period_ticks)``."""
-        exact = k * self.period_ticks
-        return self.t0 + exact.numerator // exact.denominator
+        return self.t0 + k * self._period_num // self._period_den  # type: ignore[attr-defined]
 
     def first_cycle_at_or_after(self, t: int) -> int:
         """Smallest ``k`` with ``t(k) >= t`` (``t`` in ticks)."""
@@ -173,7 +175,11 @@ class ServoClock:
 
 
 def percent(timebase: int | Fraction, i10: int) -> Fraction:
-    """Time-base value as a feedrate-override percentage: ``100 * value / I10`` (exact)."""
+    """Time-base value as a feedrate-override percentage: ``100 * value / I10`` (exact).
+
+    For an integer value the float of it is ``100 * value / i10`` (Python's correctly rounded
+    integer division), without building the fraction: what the servo cycle records.
+    """
     return Fraction(100) * timebase / i10
 
 

@@ -9,6 +9,10 @@
                                     # &1 #1->1000X, buffers; before the plants are coupled
     plc_scan_period = "200 us"      # background (PLC 1..31) scan period: the controller's load
     plc_scan_offset = "0 us"        # first background scan
+    include_path = ["lib"]          # more folders for #include (after the including file's own)
+
+    [controller.defines]            # values of the files' $(NAME) template macros
+    PLC = 3
 
     [[program]]
     file = "shear.pmc"              # more PMAC files (OPEN PROG / OPEN PLC ... CLOSE), read after the plants
@@ -62,6 +66,8 @@ class PmacFamily:
         offset = table.time("plc_scan_offset", None)
         with table.at():
             pmac.programs.configure_scan(period=period, offset=offset)
+        pmac.defines = _defines(table)
+        pmac.include_path = _folders(table, base)
         setup = table.raw("setup", [])
         files = [setup] if isinstance(setup, str) else setup
         if not isinstance(files, list) or not all(isinstance(f, str) for f in files):
@@ -126,7 +132,32 @@ def _load(pmac: Pmac, path: Path) -> None:
         text = path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigurationError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    pmac.load(text, source=path.name)
+    pmac.load(text, source=path.name, path=path)
+
+
+def _defines(table: Table) -> dict[str, str]:
+    """``[controller.defines]``: the values of ``$(NAME)`` template macros (texts or numbers)."""
+    defines = table.table("defines")
+    values: dict[str, str] = {}
+    for name in list(defines.data):
+        value = defines.raw(name)
+        if isinstance(value, bool) or not isinstance(value, str | int | float):
+            raise defines.error(name, value, "a text or a number (the macro's value)")
+        values[str(name)] = str(value)
+    return values
+
+
+def _folders(table: Table, base: Path) -> list[Path]:
+    """``include_path``: folders ``#include`` looks in after the including file's own (relative to the machine file)."""
+    value = table.raw("include_path", [])
+    names = [value] if isinstance(value, str) else value
+    if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+        raise table.error("include_path", value, "a folder or a list of folders")
+    folders = [(base / n).resolve() for n in names]
+    for name, folder in zip(names, folders, strict=True):
+        if not folder.is_dir():
+            raise table.error("include_path", name, "existing folders (relative to the machine file)")
+    return folders
 
 
 def _address(value: object) -> int:

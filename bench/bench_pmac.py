@@ -1,0 +1,120 @@
+"""Real-time factor of the PMAC runs with their FMUs, start-up cancelled, and where the time goes.
+
+Runs, each as the main job runs it (``cosim.runner.run_scenario``, no results written):
+
+* the flying shear (``examples/pmac_flying_shear/shear.toml``: the Conveyor FMU as master encoder with
+  its registration mark, the Servo FMU under a 100 Hz PID, a PLC arming the triggered time base);
+* ``pmac_fmu_slave`` (the same on a Python scenario, no PLC);
+* the line (``examples/pmac_external_time_base/line.toml``: external time base from the Conveyor FMU).
+
+Each is run for a short and a long simulated time (0.25 s and 2.25 s by default) ``--repeat`` times;
+the **marginal real-time factor** is ``(long - short) simulated s / (long - short) process CPU s``, which
+cancels start-up (imports, FMU loading, the PID design). Printed as min / median / max over the
+repeats (pairing the i-th short with the i-th long run), with the machine's load.
+
+``--profile`` adds, for one long run of each, the share of the CPU time per part of the code (cProfile
+self time grouped by module): the PMAC controller, the FMU master and adapter, the kernel, the
+trace and signals, and the rest. ``--startup`` also times ``cosim run <line.toml> --until 1ms`` in a
+fresh process (imports included). Run from the repository root::
+
+    .venv/bin/python bench/bench_pmac.py [--repeat 3] [--short 0.25] [--long 2.25] [--profile] [--startup]
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import resource
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+from clock import machine_load, spread
+
+from cosim.catalog import load
+from cosim.runner import run_scenario
+
+ROOT = Path(__file__).resolve().parent.parent
+RUNS = {
+    "flying shear": str(ROOT / "examples/pmac_flying_shear/shear.toml"),
+    "pmac_fmu_slave": "pmac_fmu_slave",
+    "line": str(ROOT / "examples/pmac_external_time_base/line.toml"),
+}
+GROUPS = (
+    ("PMAC controller", ("cosim/controllers/pmac/", "cosim/couplings/", "cosim/encoders.py", "cosim/rigs.py")),
+    ("FMU master and adapter", ("cosim/master.py", "cosim/fmu.py", "cosim/fmuvars.py", "fmpy", "ctypes")),
+    ("kernel (SimPy)", ("cosim/kernel.py", "simpy/", "cosim/timebase.py")),
+    ("trace and signals", ("cosim/trace.py", "cosim/signals.py", "cosim/tracestore.py")),
+    ("Fraction", ("fractions.py",)),
+)
+
+
+def cpu_run(name: str, seconds: float) -> tuple[float, str]:
+    """Process CPU time [s] of one run of ``seconds`` simulated, and its verdict."""
+    scenario = load(name)
+    started = time.process_time()
+    result = run_scenario(scenario, until=f"{seconds * 1000:g} ms")
+    return time.process_time() - started, result.verdict
+
+
+def profile(name: str, seconds: float) -> list[tuple[str, float]]:
+    """Share of self time per group of modules in one run."""
+    scenario = load(name)
+    profiler = cProfile.Profile()
+    profiler.enable()
+    run_scenario(scenario, until=f"{seconds * 1000:g} ms")
+    profiler.disable()
+    shares: Counter[str] = Counter()
+    for (filename, _line, _function), (_cc, _nc, self_time, _ct, _callers) in pstats.Stats(profiler).stats.items():
+        group = next((label for label, parts in GROUPS if any(p in filename for p in parts)), "other")
+        shares[group] += self_time
+    total = sum(shares.values())
+    return [(label, shares[label] / total) for label, _parts in (*GROUPS, ("other", ()))]
+
+
+def startup() -> float:
+    """CPU time [s] of ``cosim run line.toml --until 1ms`` in a fresh process (children's rusage)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    done = subprocess.run([sys.executable, "-m", "cosim", "run", RUNS["line"], "--until", "1ms", "--out",
+                           "/tmp/bench-pmac"], check=False, capture_output=True)
+    if done.returncode not in (0, 1):  # 1: its checks (about 100 ms and the end) fail after 1 ms, as they should
+        raise RuntimeError(done.stderr.decode())
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--short", type=float, default=0.25, help="short run [simulated s]")
+    parser.add_argument("--long", type=float, default=2.25, help="long run [simulated s]")
+    parser.add_argument("--profile", action="store_true")
+    parser.add_argument("--startup", action="store_true")
+    args = parser.parse_args()
+    print(f"PMAC runs, {args.short:g} s vs {args.long:g} s simulated, {args.repeat} repeats; {machine_load()}")
+    for label, name in RUNS.items():
+        cpu_run(name, 0.001)  # warm: FMUs built and loaded once, modules imported
+        shorts, longs, verdicts = [], [], set()
+        for _ in range(args.repeat):
+            short, verdict_short = cpu_run(name, args.short)
+            long, verdict_long = cpu_run(name, args.long)
+            shorts.append(short)
+            longs.append(long)
+            verdicts |= {verdict_short, verdict_long}
+        factors = [(args.long - args.short) / max(long - short, 1e-9)
+                   for short, long in zip(shorts, longs, strict=True)]
+        print(f"  {label:15s} marginal real-time factor {spread(factors, '{:.1f}')}x   (CPU short "
+              f"{spread(shorts)} s, long {spread(longs)} s; verdicts {', '.join(sorted(verdicts))})")
+        if args.profile:
+            for group, share in profile(name, args.long):
+                print(f"      {group:24s} {100 * share:5.1f} %")
+    if args.startup:
+        laps = [startup() for _ in range(args.repeat)]
+        print(f"  start-up: cosim run line.toml --until 1ms, process CPU {spread(laps)} s")
+
+
+if __name__ == "__main__":
+    main()
