@@ -16,7 +16,8 @@ from fractions import Fraction
 
 from simpy.events import Event
 
-from cosim.controllers.trio.motion import Axis, Move
+from cosim.controllers.trio.axis import Axis
+from cosim.controllers.trio.motion import Move
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
 
@@ -28,11 +29,14 @@ class MoveBuffers:
     ----------
     sim : Simulation
     axes : dict of int to Axis
+    period_s : Fraction
+        The servo period [s].
     """
 
-    def __init__(self, sim: Simulation, axes: dict[int, Axis]) -> None:
+    def __init__(self, sim: Simulation, axes: dict[int, Axis], *, period_s: Fraction) -> None:
         self.sim = sim
         self.axes = axes
+        self.period_s = period_s
         self._queued: list[Move] = []
         self._move_waiters: deque[tuple[Move, Event]] = deque()
         self._waiters: list[tuple[Callable[[], bool], Event]] = []
@@ -90,7 +94,7 @@ class MoveBuffers:
         for move in list(self._queued):
             if all(self.axes[a].current is None for a in move.axes):
                 try:
-                    move.load(self.axes, now)
+                    move.load(self.axes, now, self.period_s)
                 except ConfigurationError as exc:  # a plan that fails stops the job, naming where the move came from
                     raise ConfigurationError(f"{move.origin}: {exc}" if move.origin else str(exc)) from exc
                 for a in move.axes:
@@ -101,16 +105,20 @@ class MoveBuffers:
         """One cycle of every running move: demands, VP_SPEED and step pulses."""
         running: dict[int, Move] = {}
         for axis in self.axes.values():
-            axis.vp_speed = Fraction(0)
-            if axis.current is not None:
-                running[id(axis.current)] = axis.current
+            axis.vnum, axis.vden = 0, 1
+            move = axis.current
+            if move is not None:
+                running[id(move)] = move
+        axes = self.axes
         for move in running.values():
             if move.cancel_requested:
-                move.stop(period_s, Fraction(self.axes[move.axes[0]].params["DECEL"]))
-            demands, speed = move.advance(period_s)
-            for a, demand in zip(move.axes, demands, strict=True):
-                self.axes[a].vp_speed = speed
-                self.axes[a].output_cycle(now, period_ticks, demand, move.origin)
+                move.stop(period_s, Fraction(axes[move.axes[0]].params["DECEL"]))
+            move.advance()
+            v_num, v_den, origin = move.v_num, move.v_den, move.origin
+            for a, num, den in zip(move.axes, move.nums, move.dens, strict=True):
+                axis = axes[a]
+                axis.vnum, axis.vden = v_num, v_den
+                axis.output_cycle(now, period_ticks, num, den, origin)
 
     def release(self) -> None:
         """After the servo cycle: buffer waiting moves that now fit, release satisfied waits."""

@@ -32,7 +32,8 @@ from cosim import validate
 from cosim.controllers.trio.buffer import MoveBuffers
 from cosim.controllers.trio.gate import GateFifo, toggled_entries
 from cosim.controllers.trio.io import Console, DigitalIo
-from cosim.controllers.trio.motion import Axis, Move
+from cosim.controllers.trio.axis import Axis
+from cosim.controllers.trio.motion import Move
 from cosim.controllers.trio.outputs import SettledSignal
 from cosim.controllers.trio.params import (
     ATYPE_STEPPER_PWM,
@@ -128,7 +129,7 @@ class TrioController:
         #: The PWM output pins in the trace (``trio.axisN.pwm_out``), by axis.
         self.pwm_outputs = {n: PwmOutput(sim, f"{self.axes[n].prefix}.pwm_out", self.pwm_port(n),
                                          clock_ticks=clock_ticks) for n in PWM_AXES}
-        self.buffers = MoveBuffers(sim, self.axes)
+        self.buffers = MoveBuffers(sim, self.axes, period_s=self.period_s)
         #: Running programs by process number, and the programs RUN can start by name.
         self.processes: dict[int, Any] = {}
         self.programs: dict[str, Any] = {}
@@ -164,23 +165,23 @@ class TrioController:
         for axis in axes:
             axis.apply_offset()
         for axis in axes:
-            if axis.pwm is not None and axis.pwm.link is not None:
-                axis.pwm.servo_update(self.axes[axis.pwm.link.link_axis].vp_speed)
+            pwm = axis.pwm
+            if pwm is not None and pwm.link is not None:
+                link_axis = self.axes[pwm.link.link_axis]
+                pwm.servo_update_ratio(link_axis.vnum, link_axis.vden)
         for axis in axes:
-            self._check_following_error(axis)
+            if axis.params["SERVO"] and axis.stepper and axis.following_error_exceeds():
+                self._following_error(axis)
             axis.record()
         self.buffers.release()
 
-    def _check_following_error(self, axis: Axis) -> None:
-        if not (axis.stepper and axis.params["SERVO"]):
-            return
+    def _following_error(self, axis: Axis) -> None:
         error = axis.dpos - axis.mpos_sampled
-        if abs(error) > axis.params["FE_LIMIT"]:
-            origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
-            raise TimingViolation(
-                f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
-                f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
-                "motion error)")
+        origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
+        raise TimingViolation(
+            f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
+            f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
+            "motion error)")
 
     # -- axes and parameters ------------------------------------------------------------------
     def axis(self, number: object, *, where: str = "") -> Axis:
