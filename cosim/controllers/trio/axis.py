@@ -31,7 +31,7 @@ from typing import TYPE_CHECKING, Any
 
 from cosim.controllers.trio.counter import StepCounter
 from cosim.controllers.trio.gate import GateFifo
-from cosim.controllers.trio.params import ATYPE_STEPPER, ATYPE_STEPPER_PWM, AXIS_PARAMS, Number
+from cosim.controllers.trio.params import ATYPE_STEPPER, ATYPE_STEPPER_PWM, AXIS_PARAMS, STEPPER_ATYPES, Number
 from cosim.controllers.trio.pwm import PwmGenerator
 from cosim.errors import TimingViolation
 from cosim.signals import PulseTrain, Signal
@@ -73,7 +73,7 @@ class Axis:
         #: Counts at DPOS = 0 (moved by DEFPOS and REP_DIST).
         self.origin = Fraction(0)
         self.pending_shift = Fraction(0)
-        self.steps = 0
+        self.steps_raw = 0
         self.feedback = StepCounter(0)
         #: VP_SPEED [units/s] = vnum / vden.
         self.vnum, self.vden = 0, 1
@@ -81,6 +81,9 @@ class Axis:
         self.mnum, self.mden = 0, 1
         self.current: Move | None = None
         self.queued: Move | None = None
+        #: Nothing of the axis changes at the next servo tick unless a command or a move changes it (set False
+        #: by every change; the servo cycle then runs the axis until it is at rest and recorded).
+        self.quiet = False
         self.dpos_out = Signal(sim, f"{self.prefix}.dpos", kind="real", unit="units", description="DPOS")
         self.mpos_out = Signal(sim, f"{self.prefix}.mpos", kind="real", unit="units", description="MPOS")
         self.vp_out = Signal(sim, f"{self.prefix}.vp_speed", kind="real", unit="units/s",
@@ -111,6 +114,20 @@ class Axis:
         return self.step, self.dir
 
     # -- positions ----------------------------------------------------------------------------
+    #: Brings the servo ticks before now up to date (set by the controller; see :mod:`.servo`).
+    sync: Any = staticmethod(lambda: None)
+
+    @property
+    def steps(self) -> int:
+        """The step counter [counts] (step pulses emitted so far, signed)."""
+        self.sync()
+        return self.steps_raw
+
+    @property
+    def feeds_gate(self) -> bool:
+        """The step pulses count on the gate's PWM_ENCODER (ATYPE 35 with SERVO ON, TN20-81)."""
+        return self.gate is not None and self.params["ATYPE"] == ATYPE_STEPPER_PWM and bool(self.params["SERVO"])
+
     @property
     def units(self) -> Fraction:
         return Fraction(self.params["UNITS"])
@@ -129,6 +146,7 @@ class Axis:
     @property
     def demand(self) -> Fraction:
         """The demand position [counts], exact."""
+        self.sync()
         return Fraction(self.dnum, self.dden)
 
     def set_demand(self, counts: Fraction) -> None:
@@ -143,6 +161,7 @@ class Axis:
     @property
     def vp_speed(self) -> Fraction:
         """VP_SPEED [units/s] (the path speed of the cycle just run)."""
+        self.sync()
         return Fraction(self.vnum, self.vden)
 
     @vp_speed.setter
@@ -156,6 +175,7 @@ class Axis:
 
     def mpos_at(self, t: int) -> Fraction:
         """MPOS [units] at tick ``t``: counted step pulses on a stepper axis, else DPOS."""
+        self.sync()
         if not self.stepper:
             return self.dpos
         return (self.feedback.value(t) - self.origin) / self.units
@@ -171,6 +191,7 @@ class Axis:
         The shift is fixed now (``position - DPOS``), as the controller's OFFPOS register is.
         """
         self.pending_shift = position * self.units - (self.demand - self.origin)
+        self.quiet = False
 
     @property
     def offpos(self) -> Fraction:
@@ -185,8 +206,9 @@ class Axis:
 
     def became_stepper(self) -> None:
         """ATYPE was set to 1 or 35: the step and feedback counters start at the demand position."""
-        self.steps = self.dnum // self.dden
-        self.feedback.set_value(self.sim.now, self.steps)
+        self.steps_raw = self.dnum // self.dden
+        self.feedback.set_value(self.sim.now, self.steps_raw)
+        self.quiet = False
         self.ensure_outputs()
 
     def set_invert_step(self, on: int) -> None:
@@ -204,7 +226,7 @@ class Axis:
         self.dnum, self.dden = num, den
         if not self.stepper:
             return
-        steps = self.steps
+        steps = self.steps_raw
         target = num // den if num >= steps * den else -(-num // den)
         delta = target - steps
         if delta == 0:
@@ -220,7 +242,7 @@ class Axis:
         self.dir.set(direction)
         leading = t0 + self.dir_setup
         self.step.emit(leading, period, count, direction)
-        self.steps = target
+        self.steps_raw = target
         sign = 1 if delta > 0 else -1
         active = leading + self.pulse_width
         if self.counts_steps:
@@ -228,12 +250,18 @@ class Axis:
         if self.gate is not None and self.params["ATYPE"] == ATYPE_STEPPER_PWM and self.params["SERVO"]:
             self.gate.feed(active, period, count, sign)
 
-    def sample_mpos(self) -> None:
+    def sample_mpos(self, now: int) -> None:
         """Servo tick, before the cycle's pulses: latch MPOS (the pulses counted so far)."""
-        if self.params["ATYPE"] in (ATYPE_STEPPER, ATYPE_STEPPER_PWM):
-            self.mnum, self.mden = self.feedback.value(self.sim.now), 1
+        if self.params["ATYPE"] in STEPPER_ATYPES:
+            self.mnum, self.mden = self.feedback.value(now), 1
         else:
             self.mnum, self.mden = self.dnum, self.dden
+
+    def settle(self, now: int) -> None:
+        """End of a servo tick: the axis is :attr:`quiet` if nothing of it can change by itself any more."""
+        feedback = self.feedback
+        self.quiet = (self.current is None and self.queued is None and not self.pending_shift and not self.vnum
+                      and (feedback.count == 0 or feedback.value(now) == feedback.end_value))
 
     def following_error_exceeds(self) -> bool:
         """``|DPOS - MPOS| > FE_LIMIT`` with MPOS latched at this tick (exact, in integers)."""

@@ -22,7 +22,7 @@ running move and one more); a further move makes its program wait.
 
 from __future__ import annotations
 
-from collections.abc import Generator, Sequence
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -38,6 +38,7 @@ from cosim.controllers.trio.outputs import SettledSignal
 from cosim.controllers.trio.params import (
     ATYPE_STEPPER_PWM,
     ATYPE_VIRTUAL,
+    STEPPER_ATYPES,
     AXIS_PARAMS,
     DEFAULT_DIR_SETUP_NS,
     DEFAULT_IO_CHANNELS,
@@ -61,6 +62,7 @@ from cosim.controllers.trio.params import (
 from cosim.controllers.trio.paths import ArcPath
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
 from cosim.controllers.trio.pwm_output import PwmOutput
+from cosim.controllers.trio.servo import ServoLoop
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.kernel import Simulation
 from cosim.signals import PulseTrain, PwmPort, Signal, StepDirPort
@@ -130,12 +132,18 @@ class TrioController:
         self.pwm_outputs = {n: PwmOutput(sim, f"{self.axes[n].prefix}.pwm_out", self.pwm_port(n),
                                          clock_ticks=clock_ticks) for n in PWM_AXES}
         self.buffers = MoveBuffers(sim, self.axes, period_s=self.period_s)
+        self._gates = [ax.gate for ax in self.axes.values() if ax.gate is not None]
+        self._pwms = [ax.pwm for ax in self.axes.values() if ax.pwm is not None]
         #: Running programs by process number, and the programs RUN can start by name.
         self.processes: dict[int, Any] = {}
         self.programs: dict[str, Any] = {}
         self.wired: set[int] = set()
-        self.ticks = 0
-        sim.process(self.servo_cycle())
+        #: When the servo ticks run (explicit, skipped at rest, or in closed form): see :mod:`.servo`.
+        self.servo = ServoLoop(self)
+        for ax in self.axes.values():
+            ax.sync = self.servo.sync
+            if ax.gate is not None:
+                ax.gate.sync = self.servo.sync
 
     @property
     def setup_ticks(self) -> int:
@@ -143,37 +151,51 @@ class TrioController:
         return self.dir_setup_ticks + self.pulse_width_ticks
 
     # -- the servo cycle ----------------------------------------------------------------------
-    def servo_cycle(self) -> Generator[Event, Any, None]:
-        """SimPy process: the servo interrupt at ``k * SERVO_PERIOD``."""
-        k = -(-self.sim.now // self.period_ticks)
-        while True:
-            yield self.sim.at(k * self.period_ticks, Priority.SERVO)
-            self._tick()
-            k += 1
+    @property
+    def ticks(self) -> int:
+        """Servo ticks so far (at 0, SERVO_PERIOD, ...), run or skipped."""
+        return self.servo.k_done + 1
+
+    def settled(self) -> bool:
+        """Nothing changes at the next servo tick unless a command changes it: every axis at rest and
+        recorded, no move running or buffered, no load waiting for FIFO space, no program waiting on the
+        servo cycle."""
+        if self.buffers.busy:
+            return False
+        for axis in self.axes.values():
+            if not axis.quiet:
+                return False
+        for gate in self._gates:
+            if gate.has_waiting:
+                return False
+        return True
 
     def _tick(self) -> None:
         now = self.sim.now
-        self.ticks += 1
-        axes = self.axes.values()
-        for axis in axes:
-            axis.sample_mpos()
-        for axis in axes:
-            if axis.gate is not None:
-                axis.gate.retry_waiting()
-        self.buffers.load(now)
-        self.buffers.run_cycle(now, self.period_ticks, self.period_s)
-        for axis in axes:
+        awake = [axis for axis in self.axes.values() if not axis.quiet]
+        for axis in awake:
+            axis.sample_mpos(now)
+        for gate in self._gates:
+            if gate.has_waiting:
+                gate.retry_waiting()
+        buffers = self.buffers
+        if buffers.pending:
+            buffers.load(now)
+        buffers.run_cycle(now, self.period_ticks, self.period_s)
+        for axis in awake:
             axis.apply_offset()
-        for axis in axes:
-            pwm = axis.pwm
-            if pwm is not None and pwm.link is not None:
-                link_axis = self.axes[pwm.link.link_axis]
+        for pwm in self._pwms:
+            link = pwm.link
+            if link is not None:
+                link_axis = self.axes[link.link_axis]
                 pwm.servo_update_ratio(link_axis.vnum, link_axis.vden)
-        for axis in axes:
-            if axis.params["SERVO"] and axis.stepper and axis.following_error_exceeds():
+        for axis in awake:
+            params = axis.params
+            if params["SERVO"] and params["ATYPE"] in STEPPER_ATYPES and axis.following_error_exceeds():
                 self._following_error(axis)
             axis.record()
-        self.buffers.release()
+            axis.settle(now)
+        buffers.release()
 
     def _following_error(self, axis: Axis) -> None:
         error = axis.dpos - axis.mpos_sampled
@@ -190,6 +212,7 @@ class TrioController:
 
     def set_param(self, name: str, value: object, *, axis: int | None = None) -> None:
         """Write parameter ``name`` (vendor name) of ``axis`` (or a controller parameter)."""
+        self.servo.wake()
         key = name.upper()
         if key == "WDOG":
             self.wdog.request(on_off(value, "WDOG"))
@@ -207,6 +230,7 @@ class TrioController:
         if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and not ax.has_pwm:
             raise ConfigurationError.out_of_range(f"axis of ATYPE={ATYPE_STEPPER_PWM}", ax.number, _pwm_axes())
         was_stepper = ax.stepper
+        ax.quiet = False
         old = ax.params[key]
         ax.params[key] = converted
         if key == "ATYPE" and ax.stepper and not was_stepper:
@@ -227,6 +251,7 @@ class TrioController:
 
     def get_param(self, name: str, *, axis: int | None = None) -> Fraction:
         """Read parameter ``name`` of ``axis`` (or a controller parameter) now, exactly."""
+        self.servo.sync()
         key = name.upper()
         if key == "WDOG":
             return Fraction(int(self.wdog.value))
@@ -279,12 +304,14 @@ class TrioController:
     # -- motion commands ----------------------------------------------------------------------
     def defpos(self, axes: Sequence[int], positions: Sequence[object]) -> None:
         """``DEFPOS(p1, ...)`` for ``axes``: applied by the next servo cycle (see OFFPOS)."""
+        self.servo.wake()
         _check_count("DEFPOS", positions, axes)
         for a, p in zip(axes, positions, strict=False):
             self.axis(a).defpos(validate.exact(p, "DEFPOS position"))
 
     def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool, origin: str = "") -> Event:
         """``MOVE`` / ``MOVEABS`` on ``axes`` (the first is the base axis): an event once it is buffered."""
+        self.servo.wake()
         command = "MOVEABS" if absolute else "MOVE"
         _check_count(command, values, axes)
         group = self._group(axes[:len(values)], command)
@@ -296,6 +323,7 @@ class TrioController:
 
         End and centre are relative to the start [units]; direction 0 is anticlockwise, 1 clockwise.
         """
+        self.servo.wake()
         if len(values) != 5:
             raise ConfigurationError.out_of_range("number of MOVECIRC values", len(values),
                                                   "5 (end1, end2, centre1, centre2, direction)")
@@ -311,6 +339,7 @@ class TrioController:
 
     def forward(self, axis: int, *, reverse: bool = False, origin: str = "") -> Event:
         """``FORWARD`` / ``REVERSE``: a continuous move of ``axis`` at its SPEED until ``CANCEL``."""
+        self.servo.wake()
         command = "REVERSE" if reverse else "FORWARD"
         return self.buffers.add(Move(self._group((axis,), command), command, (), origin))
 
@@ -327,15 +356,18 @@ class TrioController:
 
     def cancel(self, axes: Sequence[int]) -> None:
         """``CANCEL``: the running moves of ``axes`` decelerate at DECEL from the next servo tick."""
+        self.servo.wake()
         self.buffers.cancel(tuple(self.axis(a).number for a in axes))
 
     def wait_idle(self, axes: Sequence[int]) -> Event:
         """An event that succeeds at the servo tick where every axis in ``axes`` is idle."""
+        self.servo.sync()
         group = tuple(self.axis(a).number for a in axes)
         return self.buffers.wait(lambda: self.buffers.idle(group))
 
     def wait_loaded(self, axes: Sequence[int]) -> Event:
         """An event that succeeds at the servo tick where no move waits behind the running one on ``axes``."""
+        self.servo.sync()
         group = tuple(self.axis(a).number for a in axes)
         return self.buffers.wait(lambda: self.buffers.loaded(group))
 
@@ -349,6 +381,7 @@ class TrioController:
             An axis without the feature, an unknown mode, a wrong number of arguments, a comparison
             flag other than 0/1, TABLE bounds, end before start, a limit outside 0..65535.
         """
+        self.servo.wake()
         ax = self.axis(axis)
         if not ax.has_pwm:
             raise ConfigurationError.out_of_range("PWM_CONTROL axis", ax.number, _pwm_axes())

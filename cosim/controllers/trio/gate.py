@@ -167,8 +167,12 @@ class GateFifo:
                                  description="gate entries passed before they were loaded so far (FIFO starvation)")
 
     # -- PWM_ENCODER --------------------------------------------------------------------------
+    #: Brings the servo ticks before now up to date (set by the controller; see :mod:`.servo`).
+    sync: Callable[[], None] = staticmethod(lambda: None)
+
     def encoder_value(self, t: int | None = None) -> int:
         """Raw PWM_ENCODER (0 .. 2**29-1) at ``t`` (default: now)."""
+        self.sync()
         return self.encoder.value(self.sim.now if t is None else t) % PWM_ENCODER_MODULUS
 
     def preset_encoder(self, raw: int) -> None:
@@ -192,6 +196,11 @@ class GateFifo:
             self._waiting.append((entries, done))
             self.waiting_level.set(self.waiting_level.value + len(entries))
         return done
+
+    @property
+    def has_waiting(self) -> bool:
+        """Loads wait for FIFO space."""
+        return bool(self._waiting)
 
     def retry_waiting(self) -> None:
         """Servo cycle: move waiting loads in, oldest first, while they fit."""

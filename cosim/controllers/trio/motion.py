@@ -77,6 +77,10 @@ class Move:
     _p_prev: int = field(default=0, repr=False)
     _straight: list[tuple[int, int, int]] | None = field(default=None, repr=False)
     _period: tuple[int, int] = field(default=(1, 1000), repr=False)
+    #: The path distance never decreases, and the largest path speed of the profile [units/s].
+    monotonic: bool = True
+    max_speed: Fraction = Fraction(0)
+    axis_objects: tuple[Axis, ...] = field(default=(), repr=False)
 
     def load(self, axes: dict[int, Axis], t: int, period_s: Fraction) -> None:
         """Plan the move at servo tick ``t`` from the axes' current demand positions."""
@@ -97,6 +101,7 @@ class Move:
         sramp = base.params.get("SRAMP", 0)
         if sramp:
             profile = smoothed(profile, Fraction(sramp) / 1000)
+        self.axis_objects = tuple(axes[a] for a in self.axes)
         self.start_counts = tuple(axes[a].demand for a in self.axes)
         self.units = tuple(axes[a].units for a in self.axes)
         self.t_start = t
@@ -110,6 +115,8 @@ class Move:
         if old is not None:
             self._p_prev = self._p_prev * (cycle.den // old.den)
         self.profile, self._cycle = profile, cycle
+        self.max_speed, lowest = _speed_range(profile)
+        self.monotonic = lowest >= 0
         path = self.path
         if isinstance(path, ArcPath):
             self._straight = None
@@ -126,6 +133,30 @@ class Move:
             e = lcm(start.denominator, h.denominator)
             straight.append((start.numerator * (e // start.denominator), h.numerator * (e // h.denominator), e))
         self._straight = straight
+
+    def fe_safe(self, axis: Axis) -> bool:
+        """The following error of ``axis`` cannot exceed FE_LIMIT in this move: the step count lags the
+        demand by less than three cycles of motion and one step."""
+        units, limit = Fraction(axis.params["UNITS"]), Fraction(axis.params["FE_LIMIT"])
+        return (limit - 3 * self.max_speed * Fraction(*self._period)) * units > 2
+
+    def pulses_safe(self, axis: Axis, period_ticks: int) -> bool:
+        """No cycle of this move can put pulses of ``axis`` closer than two pulse widths (which is an error)."""
+        most = self.max_speed * Fraction(*self._period) * Fraction(axis.params["UNITS"]) + 2
+        return period_ticks // -(-most.numerator // most.denominator) >= 2 * axis.pulse_width
+
+    def steps_after(self, index: int, cycle: int, steps_now: int) -> int:
+        """The step count of axis ``index`` after cycle ``cycle`` of a monotonic straight move, from
+        ``steps_now`` (its count now): the rule of :meth:`Axis.output_cycle`, which moves the count only in
+        the direction of motion."""
+        assert self._cycle is not None and self._straight is not None
+        s, g, e = self._straight[index]
+        num = s + g * self._cycle.numerator(cycle)
+        if g > 0:
+            return steps_now if num < steps_now * e else num // e
+        if g < 0:
+            return steps_now if num > steps_now * e else -(-num // e)
+        return steps_now
 
     @property
     def travelled(self) -> Fraction:
@@ -189,3 +220,16 @@ class Move:
         demands += list(self.start_counts[len(demands):])
         self.nums = [d.numerator for d in demands]
         self.dens = [d.denominator for d in demands]
+
+
+def _speed_range(profile: Piecewise) -> tuple[Fraction, Fraction]:
+    """The largest and the smallest path speed of ``profile`` [units/s] (at piece ends and speed extremes)."""
+    times = profile.breakpoints()
+    for i, (t0, poly) in enumerate(profile.pieces):
+        if len(poly) == 4 and poly[3]:  # a cubic piece: the speed has a vertex
+            vertex = -poly[2] / (3 * poly[3])
+            t1 = profile.pieces[i + 1][0] if i + 1 < len(profile.pieces) else profile.t_end
+            if vertex > t0 and (t1 is None or vertex < t1):
+                times.append(vertex)
+    speeds = [profile.speed(t) for t in times] + [profile.speed(t - Fraction(1, 10**30)) for t in times if t > 0]
+    return max(abs(v) for v in speeds), min(speeds)

@@ -40,6 +40,8 @@ DEFAULT_SERVO_PERIOD_US = 1000
 ATYPE_VIRTUAL = 0
 ATYPE_STEPPER = 1
 ATYPE_STEPPER_PWM = 35
+#: The ATYPEs that emit step pulses.
+STEPPER_ATYPES = (ATYPE_STEPPER, ATYPE_STEPPER_PWM)
 #: Divisor of the speed-link formula of PWM_CONTROL(2) (``VP_SPEED * multiplier / 100000 + offset``).
 SPEED_LINK_DIVISOR = 100_000
 #: Default size of TABLE memory [entries] (not stated in the note: a model parameter).

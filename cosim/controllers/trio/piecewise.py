@@ -249,7 +249,7 @@ class CycleProfile:
             return self.p_end
         pieces = self.pieces
         i = len(pieces) - 1
-        while pieces[i][0] > k:
+        while i and pieces[i][0] > k:
             i -= 1
         value = 0
         for c in reversed(pieces[i][1]):
