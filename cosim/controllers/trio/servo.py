@@ -41,6 +41,8 @@ from cosim.timebase import Priority
 
 if TYPE_CHECKING:
     from cosim.controllers.trio.axis import Axis
+    from cosim.controllers.trio.counter import StepCounter
+    from cosim.trace import Trace
     from cosim.controllers.trio.controller import TrioController
     from cosim.controllers.trio.motion import Move
 
@@ -279,26 +281,44 @@ def materialize(controller: TrioController, moves: list[Move], k_from: int, k_to
         move.dens = [e for _, _, e in straight]
 
 
-def _materialize_axis(axis: Axis, trace: object, period: int, k_from: int, nums: list[int], den: int,
+def _materialize_axis(axis: Axis, trace: Trace, period: int, k_from: int, nums: list[int], den: int,
                       vps: list[int], den_v: int) -> None:
     a_scale, b_scale, c_scale = axis._scales()
-    record = trace.record  # type: ignore[attr-defined]
     dpos_out, mpos_out, vp_out = axis.dpos_out, axis.mpos_out, axis.vp_out
     dpos_last, mpos_last, vp_last = dpos_out.value, mpos_out.value, vp_out.value
+    dpos_t: list[int] = []
+    dpos_v: list[float] = []
+    mpos_t: list[int] = []
+    mpos_v: list[float] = []
+    vp_t: list[int] = []
+    vp_v: list[float] = []
+    seg_t0: list[int] = []
+    seg_n: list[int] = []
+    seg_dir: list[int] = []
+    dir_t: list[int] = []
+    dir_v: list[int] = []
     stepper = axis.stepper
     feedback = axis.feedback
     counts = axis.counts_steps
     gate = axis.gate if axis.feeds_gate else None
     steps = axis.steps_raw
     step, direction = axis.step, axis.dir
-    dir_value = direction.value if direction is not None else 0
+    dir_value = int(direction.value) if direction is not None else 0
     dir_setup, width = axis.dir_setup, axis.pulse_width
+    # the feedback counter's current segment, followed here without a call per cycle
+    fb_before, fb_t0, fb_dur, fb_count, fb_sign = (feedback._before, feedback.t0, feedback.duration, feedback.count,
+                                                   feedback.sign)
+    enc_fed = 0
     mnum, mden = axis.mnum, axis.mden
     dnum, dden = axis.dnum, axis.dden
+    t = k_from * period
     for i, num in enumerate(nums):
-        t = (k_from + i) * period
-        if stepper:
-            mnum, mden = feedback.value(t), 1
+        if stepper:  # MPOS latched at the tick: the counted pulses (pulse k of a segment at t0 + k dur // n)
+            if fb_count and t >= fb_t0:
+                happened = min(fb_count, -((-(t - fb_t0 + 1) * fb_count) // fb_dur))
+            else:
+                happened = 0
+            mnum, mden = fb_before + fb_sign * happened, 1
         else:
             mnum, mden = dnum, dden
         dnum, dden = num, den
@@ -306,38 +326,65 @@ def _materialize_axis(axis: Axis, trace: object, period: int, k_from: int, nums:
             target = num // den if num >= steps * den else -(-num // den)
             delta = target - steps
             if delta:
-                count, sign = (delta, 1) if delta > 0 else (-delta, -1)
-                new_dir = 1 if delta > 0 else 0
-                assert step is not None and direction is not None
+                if delta > 0:
+                    count, sign, new_dir = delta, 1, 1
+                else:
+                    count, sign, new_dir = -delta, -1, 0
                 if new_dir != dir_value:
                     dir_value = new_dir
-                    record(direction.name, t, new_dir)
+                    dir_t.append(t)
+                    dir_v.append(new_dir)
                 leading = t + dir_setup
-                step._record_segment(leading, period, count, new_dir)
-                step.position += delta
+                seg_t0.append(leading)
+                seg_n.append(count)
+                seg_dir.append(new_dir)
                 steps = target
                 if counts:
-                    feedback.feed(leading + width, period, count, sign)
-                if gate is not None:
-                    gate.encoder.feed(leading + width, period, count, sign)
+                    fb_before += fb_sign * fb_count
+                    fb_t0, fb_dur, fb_count, fb_sign = leading + width, period, count, sign
+                enc_fed += delta
         dpos = (num * a_scale - b_scale * den) / (den * c_scale)
         if dpos != dpos_last:
-            record(dpos_out.name, t, dpos)
+            dpos_t.append(t)
+            dpos_v.append(dpos)
             dpos_last = dpos
         mpos = (mnum * a_scale - b_scale * mden) / (mden * c_scale)
         if mpos != mpos_last:
-            record(mpos_out.name, t, mpos)
+            mpos_t.append(t)
+            mpos_v.append(mpos)
             mpos_last = mpos
         vp = vps[i] / den_v
         if vp != vp_last:
-            record(vp_out.name, t, vp)
+            vp_t.append(t)
+            vp_v.append(vp)
             vp_last = vp
-    dpos_out.value, mpos_out.value, vp_out.value = dpos_last, mpos_last, vp_last
-    if direction is not None:
+        t += period
+    for signal, times, values, last in ((dpos_out, dpos_t, dpos_v, dpos_last), (mpos_out, mpos_t, mpos_v, mpos_last),
+                                        (vp_out, vp_t, vp_v, vp_last)):
+        if times:
+            trace.extend(signal.name, times, values)
+            signal.value = last
+    if direction is not None and dir_t:
+        trace.extend(direction.name, dir_t, dir_v)
         direction.value = dir_value
+    if step is not None and seg_t0:
+        trace.extend_segments(step.name, seg_t0, [period] * len(seg_t0), seg_n, seg_dir)
+        step.position += steps - axis.steps_raw
+    if counts:
+        feedback._before, feedback.t0, feedback.duration, feedback.count, feedback.sign = (fb_before, fb_t0, fb_dur,
+                                                                                           fb_count, fb_sign)
+        feedback._times = None
+    if gate is not None and enc_fed:
+        _feed_total(gate.encoder, seg_t0[-1] + width, period, seg_n[-1], 1 if seg_dir[-1] else -1, enc_fed)
+        gate._plan_id += 1
     axis.steps_raw = steps
     axis.mnum, axis.mden = mnum, mden
     axis.dnum, axis.dden = dnum, dden
     axis.vnum, axis.vden = vps[-1], den_v
-    if gate is not None:
-        gate._plan_id += 1
+
+
+def _feed_total(counter: StepCounter, t0: int, duration: int, count: int, sign: int, total: int) -> None:
+    """Feed a counter ``total`` signed pulses of which the last segment is ``(t0, duration, count, sign)``."""
+    end = counter.end_value + total
+    counter.feed(t0, duration, count, sign)
+    counter._before = end - sign * count
