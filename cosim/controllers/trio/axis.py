@@ -81,6 +81,18 @@ class Axis:
         self.mnum, self.mden = 0, 1
         self.current: Move | None = None
         self.queued: Move | None = None
+        #: Limits or jog inputs are configured: the servo cycle watches them (see :mod:`.supervise`).
+        self.supervised = False
+        #: Sign of the demand's change in the last cycle (+1, -1, 0).
+        self.moving = 0
+        #: The following error exceeded FE_LIMIT (AXISSTATUS 256, until DATUM(0)).
+        self.fe_exceeded = False
+        #: Registration: the armed mode (0: none), MARK, the position latched [counts].
+        self.regist_mode = 0
+        self.mark = False
+        self.reg_pos_counts = Fraction(0)
+        self.z_seen = False
+        self.z_mark: Signal | None = None
         #: Nothing of the axis changes at the next servo tick unless a command or a move changes it (set False
         #: by every change; the servo cycle then runs the axis until it is at rest and recorded).
         self.quiet = False
@@ -211,6 +223,73 @@ class Axis:
         self.quiet = False
         self.ensure_outputs()
 
+    def shift(self, offset: Fraction) -> None:
+        """``OFFPOS = offset``: DPOS and MPOS move by ``offset`` [units] at the next servo tick (the demand
+        does not move)."""
+        self.pending_shift += -offset * self.units
+        self.quiet = False
+
+    def direction(self) -> int:
+        """Where the axis is going: the sign of its last demand change, or the running move's heading."""
+        if self.moving:
+            return self.moving
+        move = self.current
+        return 0 if move is None else move.heading(self.number)
+
+    def datum_found(self, counts: Fraction) -> None:
+        """A DATUM sequence ends at demand ``counts``: DPOS (and MPOS) are 0 there."""
+        self.origin = Fraction(counts)
+        self.pending_shift = Fraction(0)
+        self.quiet = False
+
+    def ensure_z_mark(self) -> Signal:
+        """The Z marker input ``<axis>.z_mark`` (a bit a stimulus or a plant drives); its rising edges are seen
+        by DATUM and REGIST."""
+        if self.z_mark is None:
+            self.z_mark = Signal(self.sim, f"{self.prefix}.z_mark", kind="bit",
+                                 description="Z marker input of the axis (its rising edge is the marker)")
+            self.z_mark.subscribe(self._z_changed)
+        return self.z_mark
+
+    def _z_changed(self, signal: Signal) -> None:
+        if signal.value:
+            self.z_seen = True
+        if self.regist_mode in (3, 4) and bool(signal.value) == (self.regist_mode == 3):
+            self._capture()
+
+    def arm_registration(self, mode: int, input_signal: Any) -> None:
+        """``REGIST(mode)``: MARK goes FALSE; at the next edge (1 rising, 2 falling edge of the registration
+        input; 3 rising, 4 falling edge of the Z marker) REG_POS latches the position and MARK goes TRUE."""
+        self.regist_mode, self.mark = mode, False
+        if f"{self.prefix}.reg_pos" not in self.sim.trace.info:
+            self.sim.trace.declare(f"{self.prefix}.reg_pos", "real", unit="units",
+                                   description="REG_POS latched at each registration edge (REGIST)")
+        if mode in (1, 2):
+            signal = input_signal(self.number)
+            if not getattr(signal, "_regist_subscribed", False):
+                signal.subscribe(lambda s: self._registration_edge(s))
+                signal._regist_subscribed = True
+        else:
+            self.ensure_z_mark()
+
+    def _registration_edge(self, signal: Signal) -> None:
+        if self.regist_mode in (1, 2) and bool(signal.value) == (self.regist_mode == 1):
+            self._capture()
+
+    def _capture(self) -> None:
+        self.sync()
+        if self.stepper:
+            self.reg_pos_counts = Fraction(self.feedback.value(self.sim.now))
+        else:
+            self.reg_pos_counts = Fraction(self.mnum, self.mden)
+        self.mark, self.regist_mode = True, 0
+        self.sim.trace.record(f"{self.prefix}.reg_pos", self.sim.now, float(self.reg_pos))
+
+    @property
+    def reg_pos(self) -> Fraction:
+        """REG_POS [units]: the position latched at the registration edge."""
+        return (self.reg_pos_counts - self.origin) / self.units
+
     def set_invert_step(self, on: int) -> None:
         """INVERT_STEP: the step wire idles high and pulses low; the active edge (still the trailing one,
         at the same instant) is then rising. Shown as ``<axis>.invert_step`` from the first write on."""
@@ -223,6 +302,8 @@ class Axis:
     # -- servo cycle --------------------------------------------------------------------------
     def output_cycle(self, t0: int, period: int, num: int, den: int, origin: str = "") -> None:
         """Set the demand ``num / den`` [counts] for the end of the cycle starting at ``t0``; emit its pulses."""
+        change = num * self.dden - self.dnum * den
+        self.moving = (change > 0) - (change < 0)
         self.dnum, self.dden = num, den
         if not self.stepper:
             return

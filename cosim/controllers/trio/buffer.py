@@ -61,6 +61,18 @@ class MoveBuffers:
             if move is not None and not move.done:
                 move.cancel_requested = True
 
+    def drop_buffered(self, axes: Sequence[int]) -> None:
+        """``CANCEL(1)``, ``RAPIDSTOP``: the moves buffered on ``axes`` are dropped."""
+        for move in [m for m in self._queued if set(m.axes) & set(axes)]:
+            self._queued.remove(move)
+            for a in move.axes:
+                if self.axes[a].queued is move:
+                    self.axes[a].queued = None
+
+    def start_now(self, move: Move) -> None:
+        """A move the servo cycle starts itself (a jog): loaded at this tick, on idle axes."""
+        self._queue(move)
+
     def wait(self, condition: Callable[[], bool]) -> Event:
         """An event that succeeds now, or at the first servo tick where ``condition()`` holds."""
         done = self.sim.env.event()
@@ -119,6 +131,18 @@ class MoveBuffers:
                 self._queued.remove(move)
                 self._running.append(move)
                 self._running.sort(key=lambda m: min(m.axes))  # cycles run in axis order
+        for move in self._running:
+            if self._queued and move.axis_objects and move.axis_objects[0].params.get("MERGE"):
+                self._merge(move)
+
+    def _merge(self, move: Move) -> None:
+        """MERGE = ON: a linear move buffered on the same axes joins the running one (see :meth:`Move.absorb`)."""
+        for queued in self._queued:
+            if queued.axes == move.axes and move.absorb(queued, self.axes, self.period_s):
+                self._queued.remove(queued)
+                for a in queued.axes:
+                    self.axes[a].queued = None
+                return
 
     def run_cycle(self, now: int, period_ticks: int, period_s: Fraction) -> None:
         """One cycle of every running move: demands, VP_SPEED and step pulses."""

@@ -26,14 +26,14 @@ from math import lcm
 from typing import TYPE_CHECKING
 
 from cosim import validate
-from cosim.controllers.trio.paths import ArcPath, LinearPath, RayPath
+from cosim.controllers.trio.paths import ArcPath, LinearPath, PolylinePath, RayPath
 from cosim.controllers.trio.piecewise import CycleProfile, Piecewise, smoothed
 from cosim.controllers.trio.profile import Ramp, Stop, Trapezoid, plan_from
 
 if TYPE_CHECKING:
     from cosim.controllers.trio.axis import Axis
 
-Path = LinearPath | ArcPath | RayPath
+Path = LinearPath | ArcPath | RayPath | PolylinePath
 
 
 @dataclass(eq=False)
@@ -66,6 +66,8 @@ class Move:
     cycles: int = 0
     done: bool = False
     cancel_requested: bool = False
+    #: A CANCEL has taken effect: the move decelerates to rest.
+    cancelling: bool = False
     #: Where the move ends along its path [units] (None: it does not end by itself).
     end_s: Fraction | None = None
     #: Demands of the cycle just run [counts] (numerators over :attr:`dens`) and its path speed ``v_num / v_den``.
@@ -118,7 +120,7 @@ class Move:
         self.max_speed, lowest = _speed_range(profile)
         self.monotonic = lowest >= 0
         path = self.path
-        if isinstance(path, ArcPath):
+        if isinstance(path, ArcPath | PolylinePath):
             self._straight = None
             return
         assert path is not None
@@ -134,11 +136,32 @@ class Move:
             straight.append((start.numerator * (e // start.denominator), h.numerator * (e // h.denominator), e))
         self._straight = straight
 
+    def heading(self, axis: int) -> int:
+        """The direction the move takes ``axis`` (+1, -1, 0), from its path."""
+        if self._straight is None or axis not in self.axes:
+            return 0
+        index = self.axes.index(axis)
+        if index >= len(self._straight):
+            return 0
+        g = self._straight[index][1]
+        return (g > 0) - (g < 0)
+
     def fe_safe(self, axis: Axis) -> bool:
         """The following error of ``axis`` cannot exceed FE_LIMIT in this move: the step count lags the
         demand by less than three cycles of motion and one step."""
         units, limit = Fraction(axis.params["UNITS"]), Fraction(axis.params["FE_LIMIT"])
         return (limit - 3 * self.max_speed * Fraction(*self._period)) * units > 2
+
+    def cycles_within_range(self, axis: Axis) -> int:
+        """Cycles the axis surely stays inside its repeat distance (REP_DIST), moving at most max_speed."""
+        rep = Fraction(axis.params["REP_DIST"])
+        position = abs(axis.dpos)
+        room = min(position, rep - position) if axis.params["REP_OPTION"] & 1 else rep - position
+        per_cycle = self.max_speed * Fraction(*self._period)
+        if per_cycle <= 0:
+            return 1 << 40
+        cycles = room / per_cycle
+        return max(int(cycles) - 2, 0)
 
     def pulses_safe(self, axis: Axis, period_ticks: int) -> bool:
         """No cycle of this move can put pulses of ``axis`` closer than two pulse widths (which is an error)."""
@@ -173,6 +196,7 @@ class Move:
         """CANCEL takes effect at this cycle: decelerate at ``decel`` [units/s^2] from the state now."""
         assert self.profile is not None
         self.cancel_requested = False
+        self.cancelling = True
         t_now = self.cycles * period_s
         speed = self.profile.speed(t_now)
         stop = Stop(t_now, self.profile.position(t_now), speed, decel)
@@ -193,6 +217,33 @@ class Move:
                          accel=Fraction(base.params["ACCEL"]), decel=Fraction(base.params["DECEL"]))
         self.end_s = end
         self.set_profile(self.profile.switched(t_now, rest), period_s)
+
+    def absorb(self, following: Move, axes: dict[int, Axis], period_s: Fraction) -> bool:
+        """``MERGE = ON``: take the buffered linear move ``following`` (same axes) into this one, so the axes do
+        not stop in between: one path of two lines, re-planned from the state now to the end of both at the
+        base axis' SPEED, ACCEL and DECEL. Refused (False) for other kinds of move, or once this one
+        decelerates."""
+        if (self.kind not in ("MOVE", "MOVEABS") or following.kind not in ("MOVE", "MOVEABS") or self.cancelling
+                or self.cancel_requested or self.done or self.profile is None or self.end_s is None):
+            return False
+        t_now = self.cycles * period_s
+        if self.profile.accel(t_now) < 0:
+            return False
+        assert self.path is not None and not isinstance(self.path, ArcPath | RayPath)
+        ends = [start / units + d for start, units, d in zip(self.start_counts, self.units, self.path.deltas,
+                                                              strict=True)]
+        origins = [axes[a].origin / axes[a].units for a in self.axes]
+        second = tuple(v - (end - o) if following.kind == "MOVEABS" else v
+                       for v, end, o in zip(following.values, ends, origins, strict=True))
+        segments = (self.path.segments if isinstance(self.path, PolylinePath) else (self.path.deltas,)) + (second,)
+        merged = PolylinePath(segments)
+        s_now, v_now = self.profile.position(t_now), self.profile.speed(t_now)
+        base = axes[self.axes[0]]
+        rest = plan_from(merged.length - s_now, v0=v_now, speed=Fraction(base.params["SPEED"]),
+                         accel=Fraction(base.params["ACCEL"]), decel=Fraction(base.params["DECEL"]))
+        self.path, self.end_s = merged, merged.length
+        self.set_profile(self.profile.switched(t_now, rest), period_s)
+        return True
 
     def advance(self) -> None:
         """One servo cycle: the demands at its end (:attr:`nums` / :attr:`dens` [counts]) and its path speed."""

@@ -53,7 +53,7 @@ def _shift(poly: Poly, delta: Fraction) -> Poly:
 
 
 def _integral(poly: Poly) -> Poly:
-    return (ZERO,) + tuple(c / (k + 1) for k, c in enumerate(poly))
+    return (ZERO, *tuple(c / (k + 1) for k, c in enumerate(poly)))
 
 
 def _add(a: Poly, b: Poly, scale: Fraction = Fraction(1)) -> Poly:
@@ -127,7 +127,7 @@ class Piecewise:
         if t0 <= 0:
             before = ()
         first = later.pieces[0]
-        return Piecewise(before + ((t0 if before else ZERO, first[1]),) + later.pieces[1:], later.t_end, later.length)
+        return Piecewise((*before, (t0 if before else ZERO, first[1]), *later.pieces[1:]), later.t_end, later.length)
 
     def breakpoints(self) -> list[Fraction]:
         """Where the pieces start, and the end."""
@@ -151,7 +151,7 @@ def smoothed(profile: Piecewise, window_s: Fraction) -> Piecewise:
     >>> s.t_end - p.t_end, s.position(s.t_end), s.accel(Fraction(1, 100)), s.speed(Fraction(1, 20))
     (Fraction(1, 50), Fraction(10, 1), Fraction(500, 1), Fraction(40, 1))
     """
-    if window_s <= 0 or profile.t_end is None and not profile.pieces:
+    if window_s <= 0 or (profile.t_end is None and not profile.pieces):
         return profile
     w = window_s
     # F(t) = integral of s from 0 to t, piecewise quartic; s is 0 before t = 0.

@@ -41,10 +41,10 @@ from cosim.timebase import Priority
 
 if TYPE_CHECKING:
     from cosim.controllers.trio.axis import Axis
-    from cosim.controllers.trio.counter import StepCounter
-    from cosim.trace import Trace
     from cosim.controllers.trio.controller import TrioController
+    from cosim.controllers.trio.counter import StepCounter
     from cosim.controllers.trio.motion import Move
+    from cosim.trace import Trace
 
 _HALF_WRAP = 1 << 27  # a window never spans this many counts (the gate's 29-bit wrap stays far)
 
@@ -166,7 +166,7 @@ class ServoLoop:
                 return None
         for number, axis in controller.axes.items():
             if number in moving:
-                if not _unobserved(axis):
+                if not _unobserved(axis) or axis.supervised:
                     return None
             elif not axis.quiet:
                 return None
@@ -190,6 +190,7 @@ class ServoLoop:
                 end = min(end, k + cycle.k_end - move.cycles - 1)  # the tick that runs cycle k_end
             for index, a in enumerate(move.axes):
                 axis = axes[a]
+                end = min(end, k + move.cycles_within_range(axis))
                 if axis.stepper and not move.pulses_safe(axis, self.period):
                     return k
                 if axis.params["SERVO"] and axis.stepper and not move.fe_safe(axis):
@@ -314,10 +315,7 @@ def _materialize_axis(axis: Axis, trace: Trace, period: int, k_from: int, nums: 
     t = k_from * period
     for i, num in enumerate(nums):
         if stepper:  # MPOS latched at the tick: the counted pulses (pulse k of a segment at t0 + k dur // n)
-            if fb_count and t >= fb_t0:
-                happened = min(fb_count, -((-(t - fb_t0 + 1) * fb_count) // fb_dur))
-            else:
-                happened = 0
+            happened = min(fb_count, -(-(t - fb_t0 + 1) * fb_count // fb_dur)) if fb_count and t >= fb_t0 else 0
             mnum, mden = fb_before + fb_sign * happened, 1
         else:
             mnum, mden = dnum, dden
