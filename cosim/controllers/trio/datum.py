@@ -17,9 +17,10 @@ The datum switch is the input ``DATUM_IN`` and is active low (set while the inpu
 fail-safe wiring of a normally closed switch); the Z marker is the axis' ``trio.axisN.z_mark``
 input (its rising edges). Inputs are seen at servo ticks: the switch is read at each tick, a Z
 edge between two ticks is seen at the next one. At the switch the fast search decelerates at DECEL
-to rest, then the creep phase accelerates at ACCEL to CREEP; when the creep phase sees its event the
-axis stops at once (from CREEP) and its position there becomes 0 (DPOS and MPOS, as DEFPOS(0) at
-that tick). AXISSTATUS bit 64 is set while the sequence runs.
+to rest, then the creep phase accelerates at ACCEL to CREEP; when the creep phase sees its event its
+position there becomes 0 (DPOS and MPOS, as DEFPOS(0) at
+that tick) and the axis decelerates at DECEL to rest (a little beyond: CREEP^2 / (2 DECEL)).
+AXISSTATUS bit 64 is set while the sequence runs.
 
 ``FWD_JOG`` / ``REV_JOG`` (inputs, active low): while the axis has no move and the input is set,
 it jogs at JOGSPEED (at SPEED while the ``FAST_JOG`` input is set) and decelerates at DECEL when the
@@ -110,10 +111,14 @@ class DatumMove(GenericMove):
         elif self.phase == "stopping" and self._local() - self.period_s >= self._stop_end():
             self._creep()
         elif self.phase == "creep" and ((end == "reset" and not self.switch()) or (end == "z" and axis.z_seen)):
-            self.done = True
+            axis.datum_found(self.last)  # DPOS = 0 where the event was seen; then the axis comes to rest
+            t = self._local() - self.period_s
+            assert self.profile_now is not None
+            stop = Stop(t, self.profile_now.position(t), self.profile_now.speed(t), Fraction(axis.params["DECEL"]))
+            self.profile_now = stop.pieces()
             self.phase = "found"
-            axis.datum_found(self.last)
-            return self.last
+        elif self.phase == "found" and self._local() >= self._stop_end():
+            self.done = True
         assert self.profile_now is not None
         s = self.profile_now.position(self._local())
         return self.base_count + self.sign * s * axis.units

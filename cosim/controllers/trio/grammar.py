@@ -170,8 +170,9 @@ TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXN
 
 @cache
 def parser() -> Lark:
-    """The LALR parser of :data:`GRAMMAR`, built on the first call and kept."""
-    return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+    """The LALR parser of :data:`GRAMMAR`, built on the first call and kept (and cached on disk by lark,
+    keyed by the grammar, so a new process loads it instead of building it)."""
+    return Lark(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True, cache=True)
 
 
 def normalise_lines(text: str) -> str:

@@ -67,12 +67,12 @@ class DigitalIo:
                                 allowed=f"{self.first_output}..{self.channels - 1} (0..{self.first_output - 1} "
                                         "are inputs only)")
 
-    def input(self, channel: object) -> Signal:
-        """The signal of input ``channel`` (``trio.in.N``), created on first use."""
+    def input(self, channel: object, *, initial: int = 0) -> Signal:
+        """The signal of input ``channel`` (``trio.in.N``), created on first use (at ``initial``)."""
         n = self._input_channel(channel)
         signal = self._inputs.get(n)
         if signal is None:
-            signal = self._inputs[n] = Signal(self.sim, f"{self.device}.in.{n}", kind="bit",
+            signal = self._inputs[n] = Signal(self.sim, f"{self.device}.in.{n}", kind="bit", initial=initial,
                                               description=f"digital input {n} (IN({n}))")
         return signal
 

@@ -30,6 +30,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from cosim.controllers.trio.motion import Move
+from cosim.controllers.trio.profile import Stop
 from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
@@ -82,11 +83,22 @@ class GenericMove(Move):
         return 0
 
     def stop(self, period_s: Fraction, decel: Fraction) -> None:
-        """CANCEL: a linked move ends at once, where the axis is."""
+        """CANCEL: the axis lets go of what it follows and decelerates at DECEL from the speed of its last
+        cycle to rest [?: the TRM's CANCEL of a linked move, with the model's deceleration]."""
         self.cancel_requested = False
         self.cancelling = True
-        self.done = True
-        self.target = lambda: self.last  # type: ignore[method-assign]
+        speed = Fraction(self.v_num, self.v_den)
+        sign = 1 if speed >= 0 else -1
+        profile = Stop(Fraction(0), Fraction(0), abs(speed), decel)
+        start, first = self.last, self.cycles
+        units = self.axis_list[0].units
+
+        def stopping() -> Fraction:
+            t = (self.cycles - first) * period_s
+            if t >= profile.t_end:
+                self.done = True
+            return start + sign * profile.position(t) * units
+        self.target = stopping  # type: ignore[method-assign]
 
 
 class LinkedMove(GenericMove):
