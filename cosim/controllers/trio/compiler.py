@@ -161,7 +161,14 @@ class Compiler(ExpressionCompiler):
             if axis_mod is not None and name == "WDOG":
                 raise self.fail(token, f"{name} is not an axis parameter; write {name} = value without AXIS()")
             axis = self.axis(axis_mod)
-            self.emit(node, ops.action(lambda run: run.process.set(name, value(run), axis=axis(run))))
+
+            def set_parameter(run: BasicRun, pc: int) -> int:
+                process = run.process
+                process.origin = run.where
+                process.set(name, value(run), axis=axis(run))
+                return pc + 1
+
+            self.emit(node, set_parameter)
             return
         if name in kw.READABLE:
             hint = " (use DEFPOS)" if name in ("DPOS", "MPOS") else ""
