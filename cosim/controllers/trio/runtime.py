@@ -24,7 +24,8 @@ order they became ready.
 Errors: a run-time error (a value out of range, a division by zero, a bad index...) stops the
 process with the error's number (``RUN_ERROR``) and line (``ERROR_LINE``), written to the console
 as the controller does. With ``ON BASICERROR GOTO label`` (or ``GOSUB``) the program goes on at the
-label instead. Without a handler the run stops there (the trace is kept up to that instant) and
+label instead; taking the handler disarms it [?: a model choice], so an error in the handler itself
+stops the program (write ON BASICERROR again to re-arm it). Without a handler the run stops there (the trace is kept up to that instant) and
 the controller's job is stopped with the reason (``trio.job``: ERROR).
 """
 
@@ -205,6 +206,7 @@ class BasicRun:
         if self.error_handler is None:
             raise exc
         target, gosub = self.error_handler
+        self.error_handler = None  # taken: an error in the handler stops the program (ON BASICERROR re-arms it)
         if gosub:
             self.call_gosub(pc + 1)
         return target
