@@ -8,6 +8,7 @@ at 0 is loaded at the tick at 1 ms.
 
 from __future__ import annotations
 
+import itertools
 from fractions import Fraction
 
 from cosim.controllers.trio import TrioController
@@ -139,7 +140,7 @@ def test_merge_runs_two_moves_without_stopping_between() -> None:
     trio = run("BASE(0)\nSPEED = 100\nMERGE = ON\nMOVE(10)\nMOVE(10)\nWAIT IDLE\nVR(0) = DPOS\nVR(1) = TICKS\n",
                until_ms=800)
     assert (trio.vr(0), trio.vr(1)) == (20, -301)
-    t, v = trio.sim.trace.edges("trio.axis0.vp_speed")
+    _, v = trio.sim.trace.edges("trio.axis0.vp_speed")
     assert [float(x) for x in v[1:-1]].count(0.0) == 0 and max(v) == 100
 
 
@@ -149,8 +150,8 @@ def test_sramp_smooths_the_acceleration_and_adds_its_time() -> None:
     trio = run("BASE(0)\nSPEED = 100\nSRAMP = 100\nMOVE(10)\nWAIT IDLE\nVR(0) = DPOS\nVR(1) = TICKS\n", until_ms=600)
     assert (trio.vr(0), trio.vr(1)) == (10, -301)
     _, v = trio.sim.trace.edges("trio.axis0.vp_speed")
-    steps = [b - a for a, b in zip(v[1:12], v[2:13], strict=True)]
-    assert all(b > a for a, b in zip(steps, steps[1:], strict=False))
+    steps = [b - a for a, b in itertools.pairwise(v[1:13])]
+    assert all(b > a for a, b in itertools.pairwise(steps))
 
 
 def test_axisstatus_shows_cancelling() -> None:

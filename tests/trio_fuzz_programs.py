@@ -86,7 +86,8 @@ def _simple(rng: random.Random) -> str:
         lambda: f"GOTO {rng.choice(['s1', 's2', 'top'])}",
         lambda: f"s = {rng.choice(STRINGS)} + {rng.choice(STRINGS)}",
         lambda: f"arr({e()}) = {e()}",
-        lambda: f"PRINT #{rng.choice(['0', '5', '300'])}, {rng.choice(STRINGS)}; {e()}[{rng.randint(0, 9)}, {rng.randint(0, 4)}]",
+        lambda: f"PRINT #{rng.choice(['0', '5', '300'])}, {rng.choice(STRINGS)}; {e()}"
+                f"[{rng.randint(0, 9)}, {rng.randint(0, 4)}]",
         lambda: f"DATUM({rng.choice(['0', '1', '3', '4', '7'])}){_axis(rng)}",
         lambda: f"CONNECT({e()}, {rng.choice(['0', '1', '3'])}){_axis(rng)}",
         lambda: f"MOVELINK({e()}, {e()}, {e()}, {e()}, {rng.choice(['0', '1', '2'])})",

@@ -140,6 +140,7 @@ class Compiler(ExpressionCompiler):
 
     def s_assign(self, node: Tree, depth: int) -> None:
         token, index_node, mods, value_node = node.children
+        assert isinstance(token, Token)
         name = str(token).upper()
         axis_mod, proc_mod = _mods(mods)
         value = self.expr(value_node, 0)
@@ -409,6 +410,7 @@ class Compiler(ExpressionCompiler):
     def declare(self, node: Tree) -> None:
         """Record a CONSTANT or GLOBAL declaration (its value must be known before the program runs)."""
         token, value_node = node.children
+        assert isinstance(token, Token)
         name = (str(token)[1:-1] if token.type == "STRING" else str(token)).upper()
         what = "CONSTANT" if node.data == "constant_stmt" else "GLOBAL"
         if not name or not name.replace("_", "a").isalnum() or not (name[0].isalpha() or name[0] == "_"):

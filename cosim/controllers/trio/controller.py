@@ -242,8 +242,10 @@ class TrioController(MotionCommands, ParameterAccess):
         """``VR(n)``: read a global variable (0 until written)."""
         return self.vr_memory[self._vr_index(index)]
 
-    def set_vr(self, index: object, value: int | Fraction) -> None:
-        """``VR(n) = value``: write a global variable (shared by every process)."""
+    def set_vr(self, index: object, value: object) -> None:
+        """``VR(n) = value``: write a global variable (shared by every process); VR holds numbers."""
+        if isinstance(value, str) or not isinstance(value, int | Fraction):
+            raise ConfigurationError(f"VR({index}) = {value!r} is not allowed (allowed: a number; VR holds numbers)")
         self.vr_memory[self._vr_index(index)] = value
 
     def _vr_index(self, index: object) -> int:

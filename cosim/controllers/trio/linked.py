@@ -144,7 +144,8 @@ class LinkedMove(GenericMove):
                 self.m0 = link.reg_pos_counts
             elif self.option == 2:
                 position = (self._measured() - link.origin) / link.units
-                if (self.link_pos >= 0 and position >= self.link_pos) or (self.link_pos < 0 and position <= self.link_pos):
+                reached = position >= self.link_pos if self.link_pos >= 0 else position <= self.link_pos
+                if reached:
                     self.m0 = self.link_pos * link.units + link.origin
             if self.m0 is None:
                 return None
@@ -192,9 +193,9 @@ def movelink_position(travel: Fraction, distance: Fraction, link_dist: Fraction,
 
     Examples
     --------
-    >>> [movelink_position(Fraction(m), Fraction(100), Fraction(200), Fraction(40), Fraction(40)) for m in
+    >>> [float(movelink_position(Fraction(m), Fraction(100), Fraction(200), Fraction(40), Fraction(40))) for m in
     ...  (0, 20, 40, 100, 160, 200, 250)]
-    [Fraction(0, 1), Fraction(25, 8), Fraction(25, 2), Fraction(50, 1), Fraction(175, 2), Fraction(100, 1), Fraction(100, 1)]
+    [0.0, 3.125, 12.5, 50.0, 87.5, 100.0, 100.0]
     """
     m = min(max(travel, Fraction(0)), link_dist)
     ratio = distance / (link_dist - link_acc / 2 - link_dec / 2)

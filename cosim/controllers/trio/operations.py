@@ -27,8 +27,8 @@ TRUE_VALUE, FALSE_VALUE = -1, 0
 
 def _both_numbers(a: Datum, b: Datum, op: str) -> tuple[Value, Value]:
     if isinstance(a, str) or isinstance(b, str):
-        raise BasicError(f"{op} of a string and {'a string' if isinstance(a, str) and isinstance(b, str) else 'a number'}"
-                         " is not allowed (allowed: numbers; + joins two strings)", 5)
+        other = "a string" if isinstance(a, str) and isinstance(b, str) else "a number"
+        raise BasicError(f"{op} of a string and {other} is not allowed (allowed: numbers; + joins two strings)", 5)
     return a, b
 
 
@@ -75,9 +75,9 @@ def _mod(a: Datum, b: Datum) -> Datum:
 
 def _power(a: Datum, b: Datum) -> Datum:
     x, y = _both_numbers(a, b, "^")
-    if integer_part(y) != y or abs(y) > 64:
-        raise BasicError(f"exponent = {to_text(y)} is not allowed (allowed: a whole number -64..64)", 1)
     n = integer_part(y)
+    if n != y or not -64 <= n <= 64:
+        raise BasicError(f"exponent = {to_text(y)} is not allowed (allowed: a whole number -64..64)", 1)
     if x == 0 and n < 0:
         raise BasicError("division by zero (0 to a negative power)", 2)
     return _fit(Fraction(x) ** n)
@@ -201,7 +201,7 @@ def for_init(var: str, start: Expr, stop: Expr, step: Expr, exit_pc: int,
              store: Callable[[BasicRun, str, Datum], None]) -> Op:
     def op(run: BasicRun, pc: int) -> int:
         value, limit, increment = start(run), stop(run), step(run)
-        if any(isinstance(v, str) for v in (value, limit, increment)):
+        if isinstance(value, str) or isinstance(limit, str) or isinstance(increment, str):
             raise BasicError("FOR needs numbers", 5)
         if increment == 0:
             raise BasicError("FOR STEP = 0 is not allowed (allowed: not 0)", 1)
@@ -224,12 +224,14 @@ def for_next(var: str, init: int, body: int, load: Callable[[BasicRun, str], Dat
         if isinstance(current, str):
             raise BasicError("FOR needs numbers", 5)
         try:
-            value = fit(current + increment, var)  # type: ignore[operator]
+            value = fit(current + increment, var)
         except ConfigurationError as exc:
             raise BasicError(str(exc), 9) from None
         store(run, var, value)
-        value = load(run, var)
-        past = value > limit if increment > 0 else value < limit  # type: ignore[operator]
+        stored = load(run, var)
+        if isinstance(stored, str):
+            raise BasicError("FOR needs numbers", 5)
+        past = stored > limit if increment > 0 else stored < limit
         return pc + 1 if past else body
 
     return op

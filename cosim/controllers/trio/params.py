@@ -205,7 +205,8 @@ AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     _P("SRAMP", 0, f"0..{SRAMP_MAX_MS}", _sramp, "ms", "S-ramp time: the acceleration ramps over it"),
     # accepted, stored, not modelled (servo tuning, encoder set-up, windows...)
     *(_P(name, default, "a number", _number, unit, doc, acts=False) for name, default, unit, doc in (
-        ("P_GAIN", 1, "", "proportional gain"), ("I_GAIN", 0, "", "integral gain"), ("D_GAIN", 0, "", "derivative gain"),
+        ("P_GAIN", 1, "", "proportional gain"), ("I_GAIN", 0, "", "integral gain"),
+        ("D_GAIN", 0, "", "derivative gain"),
         ("OV_GAIN", 0, "", "output velocity gain"), ("VFF_GAIN", 0, "", "velocity feed forward gain"),
         ("AFF_GAIN", 0, "", "acceleration feed forward gain"), ("DAC", 0, "", "DAC output when SERVO=OFF"),
         ("DAC_SCALE", 16, "", "DAC scaling"), ("D_ZONE_MIN", 0, "", "dead zone low"),

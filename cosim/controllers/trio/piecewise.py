@@ -116,7 +116,8 @@ class Piecewise:
 
     def later(self, t0: Fraction, s0: Fraction) -> Piecewise:
         """This profile started at ``t0`` [s] from ``s0`` [units] (times and positions of another profile)."""
-        pieces = tuple((t0 + t if i else ZERO, _add(_shift(poly, t0), (s0,))) for i, (t, poly) in enumerate(self.pieces))
+        pieces = tuple((t0 + t if i else ZERO, _add(_shift(poly, t0), (s0,)))
+                       for i, (t, poly) in enumerate(self.pieces))
         return Piecewise(pieces, None if self.t_end is None else t0 + self.t_end, s0 + self.length)
 
     def switched(self, t0: Fraction, new: Piecewise) -> Piecewise:
@@ -181,8 +182,8 @@ def smoothed(profile: Piecewise, window_s: Fraction) -> Piecewise:
             break
         upper, lower = f_at(t), _shift(f_at(t - w), w)
         pieces.append((t, tuple(c / w for c in _add(upper, lower, Fraction(-1)))))
-    t_end = None if profile.t_end is None else profile.t_end + w
-    return Piecewise(tuple(pieces), t_end, profile.length)
+    end = None if profile.t_end is None else profile.t_end + w
+    return Piecewise(tuple(pieces), end, profile.length)
 
 
 @dataclass(frozen=True)

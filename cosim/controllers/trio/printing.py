@@ -140,6 +140,7 @@ def compile_input(compiler: Compiler, node: Tree, kind: str) -> None:
 
 def _target(compiler: Compiler, node: Tree, kind: str) -> Callable[[BasicRun, Datum], None]:
     token, index_node = node.children
+    assert isinstance(token, Token)
     name = str(token).upper()
     if kind == "LINPUT":
         if name != "VR" or index_node is None:

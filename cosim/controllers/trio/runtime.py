@@ -25,7 +25,8 @@ Errors: a run-time error (a value out of range, a division by zero, a bad index.
 process with the error's number (``RUN_ERROR``) and line (``ERROR_LINE``), written to the console
 as the controller does. With ``ON BASICERROR GOTO label`` (or ``GOSUB``) the program goes on at the
 label instead; taking the handler disarms it [?: a model choice], so an error in the handler itself
-stops the program (write ON BASICERROR again to re-arm it). Without a handler the run stops there (the trace is kept up to that instant) and
+stops the program (write ON BASICERROR again to re-arm it). Without a handler the run stops there
+(the trace is kept up to that instant) and
 the controller's job is stopped with the reason (``trio.job``: ERROR).
 """
 
@@ -39,7 +40,7 @@ import simpy
 from simpy.events import Event
 
 from cosim.controllers.trio.process import TrioProcess
-from cosim.controllers.trio.values import Datum, typed
+from cosim.controllers.trio.values import Datum, Value, typed
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.job import JobState
 from cosim.kernel import At
@@ -129,7 +130,7 @@ class BasicRun:
         self.input_prompted = False
         self.stop_requested = False
         self.max_statements = MAX_STATEMENTS_PER_SERVO_PERIOD
-        self.loops: dict[int, tuple[Datum, Datum]] = {}
+        self.loops: dict[int, tuple[Value, Value]] = {}
         self.gosubs: list[int] = []
         self.pending: Event | None = None
         self.pc = 0

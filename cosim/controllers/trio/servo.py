@@ -125,9 +125,9 @@ class ServoLoop:
         """The instant of the earliest queued event that is not a plant sample (None: there is none)."""
         best = None
         for t, priority, _, event in self.sim.env._queue:
-            if priority != Priority.SAMPLE and not getattr(event, "cancelled", False) and event is not self._event:
-                if best is None or t < best:
-                    best = t
+            if (priority != Priority.SAMPLE and not getattr(event, "cancelled", False) and event is not self._event
+                    and (best is None or t < best)):
+                best = t
         return None if best is None else int(best)
 
     def sync(self, now: int | None = None, *, at_now: bool = True) -> None:

@@ -92,9 +92,13 @@ def wrap(axis: Axis) -> None:
 
 
 def within_range(axis: Axis) -> bool:
-    """DPOS is inside the repeat distance (no wrap due)."""
-    rep = axis.params["REP_DIST"] * axis.params["UNITS"]
-    position = Fraction(axis.dnum, axis.dden) - axis.origin
+    """DPOS is inside the repeat distance (no wrap due), in integers: ``(num a - b den) / (den c)`` is DPOS."""
+    a, b, c = axis._scales()
+    rep = axis.params["REP_DIST"]
+    rn, rd = rep.numerator, rep.denominator
+    den = axis.dden
+    x = (axis.dnum * a - b * den) * rd  # DPOS * den * c * rd
+    span = rn * den * c
     if axis.params["REP_OPTION"] & 1:
-        return 0 <= position < rep
-    return -rep <= position <= rep
+        return 0 <= x < span
+    return -span <= x <= span

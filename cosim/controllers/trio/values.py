@@ -71,7 +71,7 @@ def fit(value: Value, what: str = "value") -> Value:
 
 def integer_part(value: Value) -> int:
     """The integer part (towards zero) that logical operators act on."""
-    return value if type(value) is int else trunc(value)
+    return value if isinstance(value, int) else trunc(value)
 
 
 def literal(text: str) -> Value:

@@ -67,9 +67,9 @@ class TrioFamily:
                 if not isinstance(inputs, list) or len(inputs) > len(trio.axes):
                     raise ConfigurationError.out_of_range("value", inputs, f"a list of at most {len(trio.axes)} "
                                                           "input numbers, one per axis")
-                for axis, channel in enumerate(inputs):
+                for number, channel in enumerate(inputs):
                     trio.io.input(channel)
-                    trio.regist_inputs[axis] = int(channel)
+                    trio.regist_inputs[number] = int(channel)
         axes = table.table("axis")
         for key, axis in axes.items():
             with axes.at(key):
@@ -117,8 +117,10 @@ class TrioFamily:
         paths = []
         for table in programs:
             paths.append(table.file_path("file", base))
-        with (programs[0].at("file") if programs else _nothing()):
-            loaded = BasicProgram.load_all(paths) if paths else []
+        loaded = []
+        if programs:
+            with programs[0].at("file"):
+                loaded = BasicProgram.load_all(paths)
         for program in loaded:
             program.install(controller)
         for table, program in zip(programs, loaded, strict=True):
@@ -168,12 +170,3 @@ class TrioFamily:
 
 def _wire_normally_closed(target: Signal, source: Signal) -> None:
     target.set(0 if source.value else 1)
-
-
-class _nothing:
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
