@@ -5,7 +5,7 @@ Each runs on the base axis, from the servo tick it is loaded at, one cycle at a 
 * ``CONNECT(ratio, driving axis)``: an electronic gearbox. Each cycle the demand moves by ``ratio``
   counts per count the driving axis' measured position (MPOS, latched at the tick) has moved since
   the connection [?: the ratio in counts per count, as the TRM's "edges of the base axis per edge of
-  the driving axis"]. It runs until CANCEL, which ends it at once (the axis stays where it is).
+  the driving axis"]. It runs until CANCEL, which lets go and decelerates at DECEL from the speed of the last cycle.
 * ``MOVELINK(distance, link dist, link acc, link dec, link axis[, option[, link pos]])``: the axis
   moves ``distance`` [units] while the link axis moves ``link dist`` [its units], speeding up over
   the first ``link acc`` and slowing down over the last ``link dec`` of the link's travel

@@ -83,6 +83,8 @@ class Move:
     monotonic: bool = True
     max_speed: Fraction = Fraction(0)
     axis_objects: tuple[Axis, ...] = field(default=(), repr=False)
+    _per_cycle: Fraction = field(default=Fraction(0), repr=False)
+    _per_cycle_key: tuple[Fraction, tuple[int, int]] | None = field(default=None, repr=False)
 
     def load(self, axes: dict[int, Axis], t: int, period_s: Fraction) -> None:
         """Plan the move at servo tick ``t`` from the axes' current demand positions."""
@@ -146,26 +148,44 @@ class Move:
         g = self._straight[index][1]
         return (g > 0) - (g < 0)
 
+    @property
+    def per_cycle(self) -> Fraction:
+        """The longest distance a cycle of this move covers [units] (max_speed x SERVO_PERIOD)."""
+        key = (self.max_speed, self._period)
+        if self._per_cycle_key != key:
+            self._per_cycle = self.max_speed * Fraction(*self._period)
+            self._per_cycle_key = key
+        return self._per_cycle
+
     def fe_safe(self, axis: Axis) -> bool:
         """The following error of ``axis`` cannot exceed FE_LIMIT in this move: the step count lags the
         demand by less than three cycles of motion and one step."""
         units, limit = Fraction(axis.params["UNITS"]), Fraction(axis.params["FE_LIMIT"])
-        return (limit - 3 * self.max_speed * Fraction(*self._period)) * units > 2
+        return (limit - 3 * self.per_cycle) * units > 2
 
     def cycles_within_range(self, axis: Axis) -> int:
-        """Cycles the axis surely stays inside its repeat distance (REP_DIST), moving at most max_speed."""
-        rep = Fraction(axis.params["REP_DIST"])
-        position = abs(axis.dpos)
-        room = min(position, rep - position) if axis.params["REP_OPTION"] & 1 else rep - position
-        per_cycle = self.max_speed * Fraction(*self._period)
-        if per_cycle <= 0:
+        """Cycles the axis surely stays inside its repeat distance (REP_DIST), moving at most max_speed.
+
+        In integers, as :func:`~.supervise.within_range`: ``x / (den c rd)`` is DPOS and ``span / (den c rd)``
+        is REP_DIST, so the room left is ``room / (den c rd)`` and the cycles ``room / (per_cycle den c rd)``.
+        """
+        per = self.per_cycle
+        if per <= 0:
             return 1 << 40
-        cycles = room / per_cycle
-        return max(int(cycles) - 2, 0)
+        a, b, c = axis._scales()
+        rep = axis.params["REP_DIST"]
+        rn, rd = rep.numerator, rep.denominator
+        den = axis.dden
+        x = abs((axis.dnum * a - b * den) * rd)
+        span = rn * den * c
+        room = min(x, span - x) if axis.params["REP_OPTION"] & 1 else span - x
+        if room < 0:
+            return 0
+        return max(room * per.denominator // (per.numerator * den * c * rd) - 2, 0)
 
     def pulses_safe(self, axis: Axis, period_ticks: int) -> bool:
         """No cycle of this move can put pulses of ``axis`` closer than two pulse widths (which is an error)."""
-        most = self.max_speed * Fraction(*self._period) * Fraction(axis.params["UNITS"]) + 2
+        most = self.per_cycle * Fraction(axis.params["UNITS"]) + 2
         return period_ticks // -(-most.numerator // most.denominator) >= 2 * axis.pulse_width
 
     def steps_after(self, index: int, cycle: int, steps_now: int) -> int:
