@@ -150,6 +150,7 @@ MOTION_NOT_MODELLED: dict[str, Signature] = _sigs(
     ("BACKLASH", 4, 4, "BACKLASH(on/off, distance, speed, accel)", True),
     ("ACC", 1, 1, "ACC(rate) (use ACCEL)", True),
     ("DEC", 1, 1, "DEC(rate) (use DECEL)", True),
+    ("DLINK", 1, None, "DLINK(function, ...) (later firmware)", True),
 )
 
 #: Functions used in expressions (``NAME(args)``).
