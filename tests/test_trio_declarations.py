@@ -57,6 +57,17 @@ def test_dim_arrays_start_at_zero_and_check_their_index() -> None:
         run("DIM a(5)\na(5) = 1\n")
 
 
+def test_an_array_used_before_its_dim_runs_stops_the_program_at_its_line() -> None:
+    """DIM is a statement: the array exists from the moment it runs (GOTO past it, or a DIM further down)."""
+    with pytest.raises(ConfigurationError, match=r"t.bas line 4: array A is used before its DIM runs"):
+        run("GOTO later\nVR(0) = a(1)\nlater:\nVR(0) = a(1)\nDIM a(5)\n")
+    trio = TrioController(Simulation(seed=1))
+    BasicProgram.parse("INPUT #1, a(2)\nDIM a(5)\n", name="t.bas").start(trio)
+    trio.sim.call_at(MS, 1, lambda: trio.channel(1).feed("7\r"))
+    with pytest.raises(ConfigurationError, match=r"t.bas line 1: array A is used before its DIM runs"):
+        trio.sim.run(until=5 * MS)
+
+
 def test_constant_and_global_are_known_to_every_program_of_a_machine() -> None:
     """CONSTANT "name", value and GLOBAL "name", vr in one program; the other uses the names."""
     main, helper = BasicProgram.parse_all([

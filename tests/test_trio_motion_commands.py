@@ -134,6 +134,17 @@ def test_movemodify_shortens_the_move_and_comes_back_when_passed() -> None:
     assert max(trio.sim.trace.edges("trio.axis0.dpos")[1]) == 30
 
 
+def test_movemodify_to_the_end_the_move_already_has_changes_nothing() -> None:
+    """MOVE(100) at SPEED 100 from 1 ms (ramps of 0.1 s at 1000 units/s^2: 1.1 s, idle at the tick at 1101 ms).
+    A loop that gives MOVEMODIFY(100) 20000 times at 200 ms (all within one servo period) re-plans nothing:
+    the move still ends at 1101 ms."""
+    trio = run("BASE(0)\nSPEED = 100\nMOVE(100)\nWAIT IDLE\nVR(0) = -TICKS\n", until_ms=1500)
+    assert trio.vr(0) == 1101
+    trio = run("BASE(0)\nSPEED = 100\nMOVE(100)\nWA(200)\nFOR k = 1 TO 20000\n  MOVEMODIFY(100)\nNEXT k\n"
+               "WAIT IDLE\nVR(0) = -TICKS\n", until_ms=1500)
+    assert trio.vr(0) == 1101
+
+
 def test_merge_runs_two_moves_without_stopping_between() -> None:
     """MERGE = ON, MOVE(10) twice at SPEED 100, ACCEL = DECEL = 1000: one path of 20, so 0.3 s (0.1 up, 0.1 at
     100, 0.1 down) instead of two triangles of 0.2 s each; VP_SPEED never drops to 0 in between."""

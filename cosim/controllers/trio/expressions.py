@@ -231,7 +231,11 @@ class ExpressionCompiler:
             raise self.fail(node, f"{name} has {dims} dimension{'s' if dims > 1 else ''}; {len(args)} "
                                   f"ind{'ices' if len(args) != 1 else 'ex'} given")
         index = self.index(name, [self.expr(a, 1) for a in args])
-        return lambda run: run.arrays[name][index(run)]
+
+        def load(run: BasicRun) -> Datum:
+            k = index(run)  # first: it checks that the DIM has run
+            return run.arrays[name][k]
+        return load
 
     def index(self, name: str, values: list[Expr]) -> Callable[[BasicRun], int]:
         """The flat index of an element of array ``name`` (checked against its size at run time)."""

@@ -85,6 +85,8 @@ class Move:
     axis_objects: tuple[Axis, ...] = field(default=(), repr=False)
     _per_cycle: Fraction = field(default=Fraction(0), repr=False)
     _per_cycle_key: tuple[Fraction, tuple[int, int]] | None = field(default=None, repr=False)
+    #: The end and the SPEED, ACCEL, DECEL the running profile was planned with (None: another kind of profile).
+    _plan_key: tuple[object, ...] | None = field(default=None, repr=False)
 
     def load(self, axes: dict[int, Axis], t: int, period_s: Fraction) -> None:
         """Plan the move at servo tick ``t`` from the axes' current demand positions."""
@@ -111,10 +113,13 @@ class Move:
         self.t_start = t
         self._period = (period_s.numerator, period_s.denominator)
         self.set_profile(profile, period_s)
+        if self.end_s is not None and not sramp:
+            self._plan_key = (self.end_s, base.params["SPEED"], base.params["ACCEL"], base.params["DECEL"])
 
     def set_profile(self, profile: Piecewise, period_s: Fraction) -> None:
         """Run ``profile`` from the next cycle on (times from the move's start, distance along its path)."""
         old = self._cycle
+        self._plan_key = None
         cycle = CycleProfile.of(profile, period_s, with_den=1 if old is None else old.den)
         if old is not None:
             self._p_prev = self._p_prev * (cycle.den // old.den)
@@ -231,12 +236,16 @@ class Move:
         comes back), re-planned from the state now."""
         assert self.profile is not None
         base = axes[self.axes[0]]
+        key = (end, base.params["SPEED"], base.params["ACCEL"], base.params["DECEL"])
+        if key == self._plan_key:  # the end and the speeds it was planned with: nothing to re-plan
+            return
         t_now = self.cycles * period_s
         s_now, v_now = self.profile.position(t_now), self.profile.speed(t_now)
         rest = plan_from(end - s_now, v0=v_now, speed=Fraction(base.params["SPEED"]),
                          accel=Fraction(base.params["ACCEL"]), decel=Fraction(base.params["DECEL"]))
         self.end_s = end
         self.set_profile(self.profile.switched(t_now, rest), period_s)
+        self._plan_key = key
 
     def absorb(self, following: Move, axes: dict[int, Axis], period_s: Fraction) -> bool:
         """``MERGE = ON``: take the buffered linear move ``following`` (same axes) into this one, so the axes do

@@ -162,7 +162,8 @@ def _target(compiler: Compiler, node: Tree, kind: str) -> Callable[[BasicRun, Da
             element = compiler.index(name, [compiler.expr(a, 1) for a in index_args])
 
             def store_element(run: BasicRun, value: Datum) -> None:
-                run.arrays[name][element(run)] = value
+                k = element(run)  # first: it checks that the DIM has run
+                run.arrays[name][k] = value
             return store_element
         raise compiler.fail(token, f"{kind} stores in a variable, VR(n) or a DIM'd array element, not {token}(...)")
     if name in compiler.declarations.globals:
