@@ -151,6 +151,9 @@ class MoveBuffers:
             axis.vnum, axis.vden = 0, 1
         moved = self._moved = []
         for move in self._running:
+            if move.modify_to is not None:
+                end, move.modify_to = move.modify_to, None
+                move.modify(end, axes, period_s)
             if move.cancel_requested:
                 move.stop(period_s, Fraction(axes[move.axes[0]].params["DECEL"]))
             move.advance()

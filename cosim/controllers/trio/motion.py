@@ -66,6 +66,8 @@ class Move:
     cycles: int = 0
     done: bool = False
     cancel_requested: bool = False
+    #: A MOVEMODIFY's new end along the path [units], re-planned at the next servo tick (the last one given wins).
+    modify_to: Fraction | None = None
     #: A CANCEL has taken effect: the move decelerates to rest.
     cancelling: bool = False
     #: Where the move ends along its path [units] (None: it does not end by itself).
@@ -253,7 +255,8 @@ class Move:
         base axis' SPEED, ACCEL and DECEL. Refused (False) for other kinds of move, or once this one
         decelerates."""
         if (self.kind not in ("MOVE", "MOVEABS") or following.kind not in ("MOVE", "MOVEABS") or self.cancelling
-                or self.cancel_requested or self.done or self.profile is None or self.end_s is None):
+                or self.cancel_requested or self.modify_to is not None or self.done or self.profile is None
+                or self.end_s is None):
             return False
         t_now = self.cycles * period_s
         if self.profile.accel(t_now) < 0:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from simpy.events import Event
 
@@ -96,8 +96,9 @@ class MotionCommands:
         return self.buffers.add(Move(self._group((axis,), command), command, (), origin))
 
     def movemodify(self, axis: int, position: object, *, origin: str = "") -> Event:
-        """``MOVEMODIFY(position)``: the running linear move of ``axis`` ends at ``position`` [units] instead
-        (re-planned from where it is, coming back if it is past it); without one, a ``MOVEABS``."""
+        """``MOVEMODIFY(position)``: the running linear move of ``axis`` ends at ``position`` [units] instead,
+        re-planned at the next servo tick from where it is then (coming back if it is past it; of several
+        MOVEMODIFYs before that tick the last counts); without one, a ``MOVEABS``."""
         self.servo.wake()
         target = validate.exact(position, "MOVEMODIFY position")
         ax = self.axis(axis)
@@ -108,7 +109,7 @@ class MotionCommands:
         start_units = (move.start_counts[0] - ax.origin) / ax.units
         delta = move.path.deltas[0]  # type: ignore[union-attr]
         sign = 1 if delta >= 0 else -1
-        move.modify((target - start_units) * sign, self.axes, move_period(move))
+        move.modify_to = (target - start_units) * sign
         done = self.sim.env.event()
         done.succeed()
         return done
@@ -250,7 +251,3 @@ class MotionCommands:
                                         number, where=origin)
             return
         ax.arm_registration(number, self.read_input_signal)  # type: ignore[attr-defined]
-
-
-def move_period(move: Any) -> Fraction:
-    return Fraction(*move._period)

@@ -165,7 +165,8 @@ class ServoLoop:
             return None
         moving: set[int] = set()
         for move in running:
-            if move._straight is None or move.cancel_requested or move.done or not move.monotonic:
+            if (move._straight is None or move.cancel_requested or move.modify_to is not None or move.done
+                    or not move.monotonic):
                 return None
             moving.update(move.axes)
         for move in buffers._queued:
