@@ -7,9 +7,11 @@ parses, run for 30 simulated ms. A crash is any exception that is not one of the
 (:class:`cosim.errors.CosimError`); the first ones are written to ``--crashes`` with their traceback. An
 input that takes more than ``SLOW_S`` of wall time is counted as slow and written there too.
 
-Run (``--workers`` processes, each with its own seed, for ``--minutes``)::
+Run (``--workers`` processes, each with its own seed, for ``--minutes`` or until ``--inputs`` inputs in all;
+``--progress FILE`` rewrites FILE with each worker's counts every 10,000 inputs)::
 
     .venv/bin/python bench/fuzz_trio_basic.py --minutes 30 --workers 2
+    .venv/bin/python bench/fuzz_trio_basic.py --inputs 1000000 --workers 2 --progress /tmp/trio_fuzz.txt
 """
 
 from __future__ import annotations
@@ -32,14 +34,15 @@ from cosim.controllers.trio.basic import example
 SLOW_S = 5.0
 
 
-def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, float, int]:
-    """Fuzz for ``seconds``; returns (inputs, parsed, crashes, slowest input [s], slow inputs)."""
+def worker(seed: int, seconds: float, crash_dir: str, limit: int | None = None,
+           progress: str | None = None) -> tuple[int, int, int, float, int]:
+    """Fuzz for ``seconds`` or ``limit`` inputs; returns (inputs, parsed, crashes, slowest input [s], slow inputs)."""
     rng = random.Random(seed)
     note = example("tn20_81").text
     inputs = parsed = crashes = slow = 0
     slowest = 0.0
     end = time.monotonic() + seconds
-    while time.monotonic() < end:
+    while time.monotonic() < end and (limit is None or inputs < limit):
         roll = rng.random()
         text = generate(rng) if roll < 0.5 else mutate(rng, note if roll < 0.7 else generate(rng))
         started = time.monotonic()
@@ -59,20 +62,28 @@ def worker(seed: int, seconds: float, crash_dir: str) -> tuple[int, int, int, fl
                 (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
         slowest = max(slowest, took)
         inputs += 1
+        if progress and inputs % 10_000 == 0:
+            Path(f"{progress}.{seed}").write_text(f"{inputs} inputs, {parsed} parsed, {crashes} crashes, "
+                                                  f"slowest {slowest:.2f} s\n")
     return inputs, parsed, crashes, slowest, slow
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--minutes", type=float, default=10.0)
+    parser.add_argument("--minutes", type=float, default=None, help="default 10, or no limit with --inputs")
+    parser.add_argument("--inputs", type=int, default=None, help="stop after this many inputs in all")
+    parser.add_argument("--progress", default=None, help="write each worker's counts to FILE.<seed>")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--crashes", default="fuzz_crashes")
     args = parser.parse_args()
-    seconds = args.minutes * 60
+    minutes = args.minutes if args.minutes is not None else (10.0 if args.inputs is None else 1e9)
+    seconds = minutes * 60
+    share = None if args.inputs is None else -(-args.inputs // args.workers)
     started = time.monotonic()
     with multiprocessing.Pool(args.workers) as pool:
-        results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes) for k in range(args.workers)])
+        results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes, share, args.progress)
+                                        for k in range(args.workers)])
     inputs = sum(r[0] for r in results)
     print(f"{inputs} inputs ({sum(r[1] for r in results)} parsed and run), {sum(r[2] for r in results)} crashes, "
           f"slowest input {max(r[3] for r in results):.2f} s, {sum(r[4] for r in results)} slower than {SLOW_S:g} s, "

@@ -132,6 +132,8 @@ class Trace:
                  chunk_pulses: int = CHUNK_PULSES, spool: str | Path | None = None) -> None:
         self.timebase = timebase or TimeBase()
         self.info: dict[str, SignalInfo] = {}
+        #: Signals a model declares only when the run uses them (see :meth:`may_declare`).
+        self.later: set[str] = set()
         self.spill_rows = int(spill_rows)
         self.chunk_pulses = max(1, int(chunk_pulses))
         self._spool = Spool(spool)
@@ -145,6 +147,11 @@ class Trace:
         self._lines_file: Any = None
 
     # -- declaring and recording -------------------------------------------------------------
+    def may_declare(self, name: str) -> None:
+        """Announce a signal the model declares only if the run comes to it (a Trio axis's
+        ``reg_pos`` after its first ``REGIST``), so that a check or figure may name it beforehand."""
+        self.later.add(name)
+
     def declare(self, name: str, kind: str, *, unit: str = "", description: str = "",
                 pulse_width: int = 1, varying_width: bool = False) -> None:
         """Declare a signal before recording it (names are checked against the scheme).

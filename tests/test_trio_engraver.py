@@ -91,6 +91,7 @@ def test_the_note_program_with_other_units_table_and_targets_runs_from_its_text_
         text = text.replace(old, new)
     (tmp_path / "variant.bas").write_text(text)
     (tmp_path / "note.toml").write_text('[machine]\nuntil = "2 s"\n[controller]\nfamily = "trio"\n'
+                                        '[job]\ncheck = false\n'  # the program repeats until stopped
                                         '[[program]]\nfile = "unused.bas"\n')
     (tmp_path / "unused.bas").write_text("WA(1)\n")
     out = tmp_path / "out"

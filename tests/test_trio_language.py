@@ -160,19 +160,21 @@ VR(0) = n
     ("RETURN:\n", r"t.bas line 1, column 1: RETURN is a keyword, not a label"),
     ("MOVECIRC(1, 2, 3, 4)\n", r"t.bas line 1, column 1: number of MOVECIRC arguments = 4 is not allowed \(allowed: "
                                r"5: MOVECIRC\(end1, end2, centre1, centre2, direction\)\)"),
-    ("OP(8)\n", r"t.bas line 1, column 1: number of OP arguments = 1 is not allowed \(allowed: 2: OP\(output, "
-                r"ON/OFF\)\)"),
-    ("x = IN(1, 2)\nVR(0)=x\n", r"t.bas line 1, column 5: number of IN arguments = 2 is not allowed \(allowed: 1: "
-                               r"IN\(input\)\)"),
+    ("OP(8, ON, 3)\n", r"t.bas line 1, column 1: number of OP arguments = 3 is not allowed \(allowed: 1..2: "
+                       r"OP\(output, ON/OFF\) or OP\(bit pattern\)\)"),
+    ("x = IN(1, 2, 3)\nVR(0)=x\n", r"t.bas line 1, column 5: number of IN arguments = 3 is not allowed \(allowed: "
+                                  r"0..2: IN\(input\) or IN\(first, last\)\)"),
     ("WA(1, 2)\n", r"t.bas line 1, column 1: number of WA arguments = 2 is not allowed \(allowed: 1: WA\(ms\)\)"),
-    ("CANCEL(1)\n", r"t.bas line 1, column 1: number of CANCEL arguments = 1 is not allowed \(allowed: 0: CANCEL\)"),
+    ("CANCEL(1, 2)\n", r"t.bas line 1, column 1: number of CANCEL arguments = 2 is not allowed \(allowed: 0..1: "
+                       r"CANCEL or CANCEL\(1\)\)"),
     ("PWM_CONTROL(3, 1, ON)\n", r"t.bas line 1, column 1: number of PWM_CONTROL\(3\) arguments = 3 is not allowed "
                                 r"\(allowed: 5, the mode and 4 more\)"),
-    ("DATUM(3)\n", r"t.bas line 1, column 1: DATUM is not modelled: its datum sequences"),
+    ("DATUM(3, 4)\n", r"t.bas line 1, column 1: number of DATUM arguments = 2 is not allowed \(allowed: 1: "
+                      r"DATUM\(sequence 0..6\)\)"),
     ("MOVECIRC(1,2,3,4,0) AXIS(2)\n", r"t.bas line 1, column 21: MOVECIRC takes no AXIS\(\) modifier"),
     ("x = ON AXIS(2)\nVR(0)=x\n", r"t.bas line 1, column 5: ON is a constant; it takes no AXIS\(\)"),
     ("TICKS AXIS(1) = 3\n", r"t.bas line 1, column 1: TICKS is not an axis parameter"),
-    ("PRINT #1, x\n", r"t.bas line 1, column 7: syntax error, unexpected '#'"),
+    ("PRINT #1 x\n", r"t.bas line 1, column 10: syntax error, unexpected 'x'"),
 ])
 def test_bad_programs_are_refused_with_file_line_column_and_the_allowed_values(text: str, message: str) -> None:
     with pytest.raises(ConfigurationError, match=message):

@@ -20,12 +20,16 @@ NUMBERS = ["0", "1", "2", "3", "-1", "0.5", ".5", "2.5e1", "1e9", "1e-40", "$FF"
 #: Literals beyond a Trio variable, used rarely (each refuses the whole program).
 HUGE = ["3e9", "1e99", "2147483648", "$80000000", "1e99999999"]
 PARAMS = ["UNITS", "SPEED", "ACCEL", "DECEL", "ATYPE", "SERVO", "FE_LIMIT", "PWM_CYCLE", "PWM_MARK", "INVERT_STEP",
-          "WDOG", "TICKS"]
+          "WDOG", "TICKS", "CREEP", "JOGSPEED", "DATUM_IN", "FWD_IN", "REV_IN", "FWD_JOG", "FS_LIMIT", "RS_LIMIT",
+          "REP_DIST", "REP_OPTION", "MERGE", "SRAMP", "P_GAIN", "OFFPOS", "OUTDEVICE"]
 READ_ONLY = ["DPOS", "MPOS", "VP_SPEED", "OFFPOS", "PWM_ENCODER", "FE", "IDLE", "LOADED", "SERVO_PERIOD", "ON",
-             "OFF", "TRUE", "FALSE"]
+             "OFF", "TRUE", "FALSE", "AXISSTATUS", "MARK", "REG_POS", "MTYPE", "PROC_STATUS PROC(1)", "PROCNUMBER",
+             "RUN_ERROR", "ERROR_LINE", "PI", "KEY", "TOP", "G"]
 VARIABLES = ["a", "b", "x", "i", "n"]
 OPERATORS = ["+", "-", "*", "/", "MOD", "AND", "OR", "XOR", "=", "<>", "<", ">", "<=", ">="]
-FUNCTIONS = ["ABS", "INT", "SGN", "SQR", "VR", "TABLE", "IN", "READ_OP", "OP"]
+FUNCTIONS = ["ABS", "INT", "SGN", "SQR", "VR", "TABLE", "IN", "READ_OP", "OP", "SIN", "COS", "ATAN", "EXP", "LN",
+             "FRAC", "LEN", "VAL", "FLAG", "arr"]
+STRINGS = ['"ab"', 'CHR(65)', 'HEX(255)', 'STR(1.5)', 'LEFT("abc", 2)', 'MID("conveyor", 2, 3)', "s", 'UCASE(s)']
 ODD = ["\r", "\r\n", "\x0b", "\x0c", "\x85", "\u2028", "\x00", "'", '"', ":", "(", ")", ",", ";", "$", "=", " ",
        "\t", "IF", "THEN", "ENDIF", "NEXT", "WEND", "UNTIL", "GOTO", "GOSUB", "RETURN", "label:", "é", "\ufeff"]
 
@@ -80,6 +84,22 @@ def _simple(rng: random.Random) -> str:
         lambda: "RUN \"F\"",
         lambda: f"GOSUB {rng.choice(['s1', 's2'])}",
         lambda: f"GOTO {rng.choice(['s1', 's2', 'top'])}",
+        lambda: f"s = {rng.choice(STRINGS)} + {rng.choice(STRINGS)}",
+        lambda: f"arr({e()}) = {e()}",
+        lambda: f"PRINT #{rng.choice(['0', '5', '300'])}, {rng.choice(STRINGS)}; {e()}"
+                f"[{rng.randint(0, 9)}, {rng.randint(0, 4)}]",
+        lambda: f"DATUM({rng.choice(['0', '1', '3', '4', '7'])}){_axis(rng)}",
+        lambda: f"CONNECT({e()}, {rng.choice(['0', '1', '3'])}){_axis(rng)}",
+        lambda: f"MOVELINK({e()}, {e()}, {e()}, {e()}, {rng.choice(['0', '1', '2'])})",
+        lambda: f"CAMBOX(0, 3, {e()}, {e()}, {rng.choice(['0', '1'])})",
+        lambda: f"CAM(0, 3, {e()}, {e()})",
+        lambda: f"MOVEMODIFY({e()})",
+        lambda: f"REGIST({rng.choice(['1', '2', '3', '9'])})",
+        lambda: rng.choice(["TRIGGER", "RAPIDSTOP", "CANCEL(1)", "PROCESS", "HALT", "STOP", 'STOP "F"']),
+        lambda: f"ON {e()} GOSUB s1, s2",
+        lambda: f"GET #{rng.choice(['0', '1'])}, k",
+        lambda: f"SETCOM({e()}, 8, 1, 0, 1)",
+        lambda: f"FLAG({e()}, ON)",
     ]
     return rng.choice(choices)()
 
@@ -107,9 +127,11 @@ def _block(rng: random.Random, depth: int) -> list[str]:
 
 def generate(rng: random.Random) -> str:
     """A program of the modelled subset, with labels and subroutines, that may or may not be valid."""
-    lines = ["top:", *[f"{v} = {_number(rng)}" for v in VARIABLES], *_block(rng, 0), "GOTO top" if rng.random() < 0.2
+    lines = ["top:", 'CONSTANT "top", 3', 'GLOBAL "g", 7', "DIM arr(5), s AS STRING(8), k AS INTEGER",
+             "ON BASICERROR GOTO s2" if rng.random() < 0.3 else "k = 0",
+             *[f"{v} = {_number(rng)}" for v in VARIABLES], *_block(rng, 0), "GOTO top" if rng.random() < 0.2
              else "WA(1)", "s1:", *_block(rng, 2), "RETURN", "s2:", "RETURN"]
-    lines.append(f"PRINT a; b; x; i; n {rng.choice(['', ';'])}")  # every variable is read
+    lines.append(f"PRINT a; b; x; i; n; k; s {rng.choice(['', ';'])}")  # every variable is read
     return "\n".join(f"{line} ' c" if rng.random() < 0.1 else line for line in lines) + "\n"
 
 

@@ -176,7 +176,7 @@ def signal_problem(trace: Trace, name: object, plants: Mapping[str, Any]) -> str
     """
     if not isinstance(name, str):
         return f"a signal name is text, not {name!r}"
-    if name in trace.info:
+    if name in trace.info or name in trace.later:
         return None
     parts = name.split(".")
     numbered = _NUMBERED.fullmatch(parts[1]) if len(parts) == 3 else None

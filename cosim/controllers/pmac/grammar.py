@@ -267,10 +267,10 @@ def parser(context: str) -> Lark:
 
     One parser per context, so that a letter is lexed by what its context allows (``K`` kills in
     an online line and is a circle-centre word in a program; ``J+`` jogs, ``J-10`` is a centre).
-    Building one takes about a second; lark keeps the built tables in a file of the temporary folder
-    (its ``cache`` option, keyed by the grammar's hash), so later processes load them instead.
+    Building one takes about a second; :func:`cosim.controllers.grammars.lark_parser` keeps the built
+    tables in the per-user cache (keyed by the grammar's hash), so later processes load them instead.
     """
-    from lark import Lark
+    from cosim.controllers.grammars import lark_parser
 
-    return Lark(GRAMMAR, parser="lalr", start=f"{context}_line", propagate_positions=True, maybe_placeholders=True,
-                cache=True)
+    return lark_parser(GRAMMAR, parser="lalr", start=f"{context}_line", propagate_positions=True,
+                       maybe_placeholders=True)

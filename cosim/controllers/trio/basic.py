@@ -1,60 +1,60 @@
-"""Trio BASIC programs: parsed, checked and compiled before they run; run as SimPy processes.
+"""Trio BASIC programs: parsed, checked and compiled before they run; run on processes of the controller.
 
-A program is parsed with the LALR grammar of :mod:`.grammar`, checked and compiled by
-:mod:`.compiler` (every error a program can show without running is found here, with the file,
-line and column), and run by :class:`BasicRun` on a process of the controller with its own BASE,
-local variables and ``TICKS``; ``VR``, ``TABLE``, the axes and the I/O are shared. Several programs
-run at once (``RUN "NAME", process`` or :meth:`BasicProgram.start` with ``process=``).
+The language in layers that import one way (text -> syntax tree -> compiled program -> runtime):
+:mod:`.grammar` and :mod:`.syntax` parse, :mod:`.compiler` (with :mod:`.expressions`,
+:mod:`.printing`) checks and compiles into operations (:mod:`.operations`, :mod:`.commands`,
+:mod:`.functions`), :mod:`.runtime` runs them. This module ties them together:
+:class:`BasicProgram` (parse, load, start) and :class:`ProgramControl` (``RUN``, ``STOP``, ``HALT``
+and the process parameters ``PROC_STATUS``, ``TICKS PROC(n)``...).
 
-Timing: statements take no simulated time; a program only waits at ``WAIT IDLE``, ``WAIT LOADED``,
-``WAIT UNTIL`` (checked at once, then at every servo tick), ``WA``, a move while the move buffer is
-full, and a ``PWM_CONTROL(3)`` while the FIFO is full. A process that runs
-:data:`MAX_STATEMENTS_PER_SERVO_PERIOD` statements within one servo period is stopped with an
-error naming its line: statements take no time in this model, so a loop that polls without
-waiting (or waits a few ns at a time) would freeze the simulated clock or crawl along it (wait with
-``WAIT UNTIL``, which checks once per servo cycle, or ``WA``).
-
-Programs that run at the same instant run one after the other, each until it waits, in the order
-they became ready (deterministic).
+Several programs of one machine share their ``CONSTANT`` and ``GLOBAL`` names
+(:meth:`BasicProgram.parse_all`, :meth:`BasicProgram.load_all`), as on the controller.
 """
 
 from __future__ import annotations
 
-from collections.abc import Generator
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import simpy
-from lark import Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
-from simpy.events import Event
-
 from cosim import validate
-from cosim.controllers.grammars import lark_parser
-from cosim.controllers.trio.compiler import Compiled, Compiler
+from cosim.controllers.trio.compiler import Compiler, declarations_of
 from cosim.controllers.trio.controller import TrioController
-from cosim.controllers.trio.grammar import GRAMMAR, normalise_lines
+from cosim.controllers.trio.expressions import Declarations
 from cosim.controllers.trio.params import PROCESSES
-from cosim.controllers.trio.process import TrioProcess
-from cosim.controllers.trio.values import Value
-from cosim.errors import ConfigurationError, TimingViolation
-from cosim.kernel import At
-from cosim.timebase import Priority
+from cosim.controllers.trio.runtime import MAX_STATEMENTS_PER_SERVO_PERIOD, BasicError, BasicRun, Compiled
+from cosim.controllers.trio.syntax import parse
+from cosim.controllers.trio.values import Datum, Value, integer_part
+from cosim.errors import ConfigurationError
 
 EXAMPLES = Path(__file__).resolve().parent / "examples"
-#: Statements a process may run within one servo period.
-MAX_STATEMENTS_PER_SERVO_PERIOD = 100_000
-#: Deepest GOSUB nesting.
-MAX_GOSUB_DEPTH = 64
-#: Longest console line [characters]; a longer one is written in parts.
-MAX_PRINT_LINE = 10_000
+__all__ = ["MAX_STATEMENTS_PER_SERVO_PERIOD", "BasicProgram", "ProgramControl", "example"]
 
-_PARSER = lark_parser(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
-_TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXNUM": "a $hex number",
-              "STRING": "a \"string\"", "LABEL": "a label", "LPAR": "(", "RPAR": ")", "COMMA": ",", "_COMMA": ",",
-              "COLON": ":", "SEMICOLON": ";", "MINUS": "-", "PLUS": "+", "_EQ": "=", "CMP": "a comparison",
-              "ADD": "+ or -", "MUL": "* / MOD", "LOGIC_AND": "AND", "LOGIC_OR": "OR XOR"}
+
+def _read(path: Path) -> str:
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("latin-1")
+
+
+def _includer(folder: Path | None, extra: dict[str, str]) -> Any:
+    """``INCLUDE "name"``: a program of the machine, or ``name.bas`` / ``name`` beside the file."""
+    def include(name: str) -> tuple[str, str]:
+        key = Path(name).stem.upper()
+        if key in extra:
+            return f"{key.lower()}.bas", extra[key]
+        if folder is not None:
+            for candidate in (folder / name, folder / f"{name}.bas", folder / f"{name}.BAS"):
+                if candidate.is_file():
+                    return candidate.name, _read(candidate)
+            matches = [p for p in folder.glob("*.bas") if p.stem.upper() == key]
+            if matches:
+                return matches[0].name, _read(matches[0])
+        raise ConfigurationError(f"no program {name} (looked for {name}.bas beside the program)")
+    return include
 
 
 @dataclass(frozen=True)
@@ -74,32 +74,53 @@ class BasicProgram:
     compiled: Compiled = field(repr=False, compare=False)
 
     @classmethod
-    def parse(cls, text: str, *, name: str = "program.bas") -> BasicProgram:
+    def parse(cls, text: str, *, name: str = "program.bas", folder: str | Path | None = None,
+              declarations: Declarations | None = None) -> BasicProgram:
         """Parse, check and compile ``text``; any line end (LF, CRLF, CR, FF, VT, NEL, ...) is accepted.
+
+        Parameters
+        ----------
+        folder : path, optional
+            Where ``INCLUDE "name"`` looks for ``name.bas``.
+        declarations : Declarations, optional
+            ``CONSTANT`` and ``GLOBAL`` names shared with other programs.
 
         Raises
         ------
         ConfigurationError
             A syntax error, an unknown keyword, a wrong argument count, ... with the line and column.
         """
-        normalised = normalise_lines(text)
-        try:
-            tree = _PARSER.parse(normalised)
-        except UnexpectedInput as exc:
-            raise ConfigurationError(_syntax_message(exc, normalised, name)) from None
-        assert isinstance(tree, Tree)
-        return cls(name, text, Compiler(name).compile(tree))
+        tree = parse(text, name)
+        include = _includer(None if folder is None else Path(folder), {})
+        shared = declarations if declarations is not None else Declarations()
+        return cls(name, text, Compiler(name, declarations=shared, include=include).compile(tree))
+
+    @classmethod
+    def parse_all(cls, sources: Sequence[tuple[str, str]], *, folder: str | Path | None = None
+                  ) -> list[BasicProgram]:
+        """Parse several ``(name, text)`` programs of one machine: each knows the others' CONSTANT and GLOBAL
+        names, and may INCLUDE them by name."""
+        trees = [(name, text, parse(text, name)) for name, text in sources]
+        shared = Declarations()
+        for name, _text, tree in trees:
+            declarations_of(tree, shared, name)
+        by_key = {Path(name).stem.upper(): text for name, text in sources}
+        include = _includer(None if folder is None else Path(folder), by_key)
+        return [cls(name, text, Compiler(name, declarations=shared, include=include).compile(tree))
+                for name, text, tree in trees]
 
     @classmethod
     def load(cls, path: str | Path) -> BasicProgram:
         """Parse a program file (UTF-8, or Latin-1 where it is not UTF-8)."""
         path = Path(path)
-        data = path.read_bytes()
-        try:
-            text = data.decode("utf-8")
-        except UnicodeDecodeError:
-            text = data.decode("latin-1")
-        return cls.parse(text, name=path.name)
+        return cls.parse(_read(path), name=path.name, folder=path.parent)
+
+    @classmethod
+    def load_all(cls, paths: Sequence[str | Path]) -> list[BasicProgram]:
+        """Parse the program files of one machine together (see :meth:`parse_all`)."""
+        files = [Path(p) for p in paths]
+        folder = files[0].parent if files else None
+        return cls.parse_all([(p.name, _read(p)) for p in files], folder=folder)
 
     @property
     def key(self) -> str:
@@ -111,7 +132,7 @@ class BasicProgram:
         controller.programs[self.key] = self
 
     def start(self, controller: TrioController, *, process: int | None = None, base: tuple[int, ...] = (0,),
-              at: int | None = None) -> BasicRun:
+              at: int | None = None, job: bool = False) -> BasicRun:
         """Run the program on ``controller`` from tick ``at`` (default: now), as a SimPy process.
 
         Parameters
@@ -123,6 +144,9 @@ class BasicProgram:
             BASE group the program starts with.
         at : int, optional
             Start instant [ticks].
+        job : bool
+            The process is a part of the controller's job (``trio.job``): it begins now and finishes
+            when the process stops.
 
         Raises
         ------
@@ -131,7 +155,9 @@ class BasicProgram:
         """
         number = _process_number(controller, process)
         self.install(controller)
-        run = BasicRun(self, controller, base=base, number=number)
+        run = BasicRun(self.name, self.compiled, controller, base=base, number=number, program=self)
+        run.program_control = ProgramControl(controller)
+        run.max_statements = MAX_STATEMENTS_PER_SERVO_PERIOD  # read here, so a test may lower it
         for channel in self.compiled.inputs:  # so a machine can drive them from the start; a bad channel is an
             if 0 <= channel < controller.io.channels:  # error at its line when the program gets there
                 controller.io.input(channel)
@@ -139,11 +165,14 @@ class BasicProgram:
             if controller.io.first_output <= channel < controller.io.channels:
                 controller.io.output(channel)
         controller.processes[number] = run
+        if job:
+            run.job_part = f"process {number} ({self.name})"
+            controller.job.begin(run.job_part)
         run.process_handle = controller.sim.process(run.main(controller.sim.now if at is None else at))
         return run
 
 
-def _process_number(controller: TrioController, process: int | None) -> int:
+def _process_number(controller: TrioController, process: object | None) -> int:
     allowed = f"1..{PROCESSES} (the user processes of a Euro 205)"
     if process is None:
         free = [n for n in range(1, PROCESSES + 1) if n not in controller.processes]
@@ -152,7 +181,7 @@ def _process_number(controller: TrioController, process: int | None) -> int:
         return free[0]
     number = validate.integer(process, "process", low=1, high=PROCESSES, allowed=allowed, whole=True)
     if number in controller.processes:
-        raise ConfigurationError(f"process {number} already runs {controller.processes[number].program.name}")
+        raise ConfigurationError(f"process {number} already runs {controller.processes[number].name}")
     return number
 
 
@@ -165,179 +194,88 @@ def example(name: str = "tn20_81") -> BasicProgram:
     return BasicProgram.load(path)
 
 
-def _expected(exc: UnexpectedInput) -> str:
-    names = getattr(exc, "expected", None) or getattr(exc, "allowed", None) or set()
-    shown = sorted({_TERMINALS.get(n, n.lstrip("_")) for n in names})
-    return f" (expected: {', '.join(shown)})" if shown else ""
+class ProgramControl:
+    """``RUN``, ``STOP``, ``HALT`` and the process parameters, for the programs of one controller."""
 
-
-def _syntax_message(exc: UnexpectedInput, text: str, name: str) -> str:
-    lines = text.splitlines()
-    line, column = exc.line, exc.column
-    source = lines[line - 1] if 1 <= line <= len(lines) else ""
-    if isinstance(exc, UnexpectedToken):
-        found = "end of line" if exc.token.type == "_NL" else repr(str(exc.token))
-    elif isinstance(exc, UnexpectedCharacters):
-        found = repr(source[column - 1]) if 1 <= column <= len(source) else "?"
-    else:
-        found = "end of program"
-    return (f"{name} line {line}, column {column}: syntax error, unexpected {found}{_expected(exc)}\n"
-            f"    {source.rstrip()}")
-
-
-class BasicRun:
-    """One running program: its process, local variables, loops, GOSUB stack, and the SimPy process.
-
-    Parameters
-    ----------
-    program : BasicProgram
-    controller : TrioController
-    base : tuple of int
-        BASE group the program starts with.
-    number : int
-        Process number.
-    """
-
-    program: BasicProgram
-    controller: TrioController
-    process: TrioProcess
-    variables: dict[str, Value]
-
-    def __init__(self, program: BasicProgram, controller: TrioController, *, base: tuple[int, ...] = (0,),
-                 number: int = 1) -> None:
-        self.program = program
+    def __init__(self, controller: TrioController) -> None:
         self.controller = controller
-        self.sim = controller.sim
-        self.number = number
-        self.process = TrioProcess(controller, base)
-        self.variables: dict[str, Value] = {}
-        self.loops: dict[int, tuple[Value, Value]] = {}
-        self.gosubs: list[int] = []
-        self.pending: Event | None = None
-        self.pc = 0
-        self.finished = False
-        self.stopped = False
-        self.process_handle: simpy.Process | None = None
-        self._printing: list[str] = []
-        self._printed = 0
 
-    @property
-    def line(self) -> int:
-        """The program line being run."""
-        lines = self.program.compiled.lines
-        return lines[self.pc] if 0 <= self.pc < len(lines) else 0
+    def _other(self, run: BasicRun, process: Value | None) -> BasicRun | None:
+        if process is None:
+            return run
+        number = integer_part(process)
+        if not 0 <= number <= PROCESSES:
+            raise BasicError(f"PROC = {number} is not allowed (allowed: 0..{PROCESSES})", 1)
+        return self.controller.processes.get(number)
 
-    @property
-    def where(self) -> str:
-        return f"{self.program.name} line {self.line}"
+    def process_param(self, run: BasicRun, name: str, process: Value | None) -> Datum:
+        """``NAME`` or ``NAME PROC(n)``: a process parameter of this or another process."""
+        other = self._other(run, process)
+        if name == "PROC_STATUS":
+            return 0 if other is None or other.finished else 1
+        if other is None:
+            return 0
+        if name == "TICKS":
+            return other.process.ticks
+        if name == "PROCNUMBER":
+            return other.number
+        if name == "ERROR_LINE":
+            return other.error_line
+        if name == "RUN_ERROR":
+            return other.run_error
+        if name == "INDEVICE":
+            return other.indevice
+        if name == "OUTDEVICE":
+            return other.outdevice
+        return -1 if other.waiting_move else 0  # PMOVE
 
-    def main(self, at: int) -> Generator[Event, Any, None]:
-        """The program as a SimPy process, from tick ``at`` (priority HOST)."""
-        ops = self.program.compiled.ops
-        try:
-            yield self.sim.at(at, Priority.HOST)
-            period = self.controller.period_ticks
-            pc, cycle, used = 0, -1, 0
-            while 0 <= pc < len(ops):
-                now = self.sim.now
-                if now // period != cycle:
-                    cycle, used = now // period, 0
-                used += 1
-                self.pc = pc
-                if used > MAX_STATEMENTS_PER_SERVO_PERIOD:
-                    raise TimingViolation(
-                        f"process {self.number} ran {MAX_STATEMENTS_PER_SERVO_PERIOD} statements in the servo period "
-                        f"from t = {cycle * period} ns to {now} ns; statements take no simulated time, so a loop "
-                        "that does not wait for the servo cycle would freeze the clock (wait with WAIT UNTIL, "
-                        "WAIT IDLE or WA)")
-                pc = ops[pc](self, pc)
-                event, self.pending = self.pending, None
-                if event is not None and (isinstance(event, At) or not event.triggered):
-                    yield event  # a command that had room at once (a succeeded plain event) does not wait
-        except simpy.Interrupt:
-            self.stopped = True
-        except (ConfigurationError, TimingViolation) as exc:
-            raise type(exc)(f"{self.where}: {exc}") from exc
-        finally:
-            if self.controller.processes.get(self.number) is self:
-                del self.controller.processes[self.number]
-            if self._printing:
-                self._flush_print()
-        self.finished = True
+    def set_process_param(self, run: BasicRun, name: str, value: Datum, process: Value | None) -> None:
+        other = self._other(run, process)
+        if other is None:
+            raise BasicError(f"{name} PROC({integer_part(process or 0)}): no program runs on that process", 7)
+        if isinstance(value, str):
+            raise BasicError(f"{name} = {value!r}: a number is needed", 5)
+        if name == "TICKS":
+            other.process.ticks = value
+        else:
+            channel = validate.integer(value, name, low=0, high=255, whole=True)
+            setattr(other, name.lower(), channel)
 
-    def stop(self) -> None:
-        """Stop the program where it waits (Trio ``STOP``); moves it has issued still run to their end."""
-        if self.process_handle is not None and self.process_handle.is_alive and not self.finished:
-            self.process_handle.interrupt("STOP")
-
-    # -- what the compiled operations call ------------------------------------------------------
-    def variable(self, name: str) -> Value:
-        """A local variable's value (an error if the program has not assigned it yet)."""
-        try:
-            return self.variables[name]
-        except KeyError:
-            raise ConfigurationError(f"variable {name} is read before the program assigns it") from None
-
-    def next_servo_tick(self) -> Event:
-        """An event at the next servo tick (after the servo cycle there)."""
-        period = self.controller.period_ticks
-        return self.sim.at((self.sim.now // period + 1) * period, Priority.HOST)
-
-    def call_gosub(self, return_pc: int) -> None:
-        if len(self.gosubs) >= MAX_GOSUB_DEPTH:
-            raise ConfigurationError.out_of_range("GOSUB nesting", len(self.gosubs) + 1, f"1..{MAX_GOSUB_DEPTH}")
-        self.gosubs.append(return_pc)
-
-    def return_from_gosub(self) -> int:
-        if not self.gosubs:
-            raise ConfigurationError("RETURN without GOSUB")
-        return self.gosubs.pop()
-
-    def print_text(self, text: str, *, end: bool) -> None:
-        """``PRINT``: add ``text`` to the line; a line is written to the console when it ends (or reaches
-        :data:`MAX_PRINT_LINE` characters)."""
-        self._printing.append(text)
-        self._printed += len(text)
-        if end or self._printed >= MAX_PRINT_LINE:
-            self._flush_print()
-
-    def _flush_print(self) -> None:
-        self.controller.console.write(process=self.number, program=self.program.name, line=self.line,
-                                      text="".join(self._printing))
-        self._printing, self._printed = [], 0
-
-    def run_program(self, name: str, process: Value | None) -> None:
-        """``RUN "NAME"[, process]``: start another program the controller knows."""
-        program = self.controller.programs.get(name.upper())
+    def run_program(self, run: BasicRun, name: str, process: Value | None) -> None:
+        """``RUN "NAME"[, process]``: start another program the controller knows (a job part if ``run`` is)."""
+        controller = self.controller
+        program = controller.programs.get(name.upper())
         if program is None:
-            known = ", ".join(sorted(self.controller.programs)) or "none"
-            raise ConfigurationError.out_of_range("RUN program", name, f"a program the machine loads: {known}")
-        if any(run.program is program for run in self.controller.processes.values()):
-            raise ConfigurationError(f"RUN \"{name}\": the program is already running")
-        program.start(self.controller, process=None if process is None else process)
+            known = ", ".join(sorted(controller.programs)) or "none"
+            raise BasicError(f"RUN program = {name!r} is not allowed (allowed: a program the machine loads: {known})",
+                             7)
+        if any(other.program is program for other in controller.processes.values()):
+            raise BasicError(f"RUN \"{name}\": the program is already running", 7)
+        try:
+            program.start(controller, process=process, job=run.job_part is not None)
+        except BasicError:
+            raise
+        except ConfigurationError as exc:
+            raise BasicError(str(exc), 7) from None
 
-    def command(self, name: str, args: list[Value], axis: Value | None) -> Event | None:
-        """Run command ``name``; an event the program waits for, or None."""
-        p = self.process
-        p.origin = self.where
-        if name == "BASE":
-            p.base(*args)
-        elif name == "TABLE":
-            p.table(*args)
-        elif name == "DEFPOS":
-            p.defpos(*args, axis=axis)
-        elif name == "PWM_CONTROL":
-            return p.pwm_control(args[0], *args[1:], axis=axis)
-        elif name in ("MOVE", "MOVEABS"):
-            return (p.move if name == "MOVE" else p.moveabs)(*args, axis=axis)
-        elif name == "MOVECIRC":
-            return p.movecirc(*args)
-        elif name in ("FORWARD", "REVERSE"):
-            return (p.forward if name == "FORWARD" else p.reverse)(axis=axis)
-        elif name == "CANCEL":
-            p.cancel(axis=axis)
-        elif name == "WA":
-            return p.wa(args[0])
-        elif name == "OP":
-            p.op(args[0], args[1])
-        return None
+    def stop_program(self, run: BasicRun, name: str, process: Value | None) -> None:
+        """``STOP "NAME"[, process]``: stop a running program (a program not running: nothing happens)."""
+        for other in list(self.controller.processes.values()):
+            if other.program is not None and other.program.key == name.upper() and (
+                    process is None or other.number == integer_part(process)):
+                if other is run:
+                    self.stop_self(run)
+                else:
+                    other.stop()
+
+    def stop_self(self, run: BasicRun) -> None:
+        """``STOP`` without a name: the program ends here."""
+        run.stop_requested = True
+
+    def halt(self, run: BasicRun) -> None:
+        """``HALT``: stop every program (this one at the end of the statement)."""
+        for other in list(self.controller.processes.values()):
+            if other is run:
+                self.stop_self(run)
+            else:
+                other.stop()

@@ -1,96 +1,118 @@
-"""Check a parsed Trio BASIC program and compile it into a flat list of operations.
+"""Check a Trio BASIC syntax tree and compile it into a flat list of operations.
 
 Every check that does not need the machine is made here, before anything runs, and names the
-program, the line and the column: an unknown keyword (with close matches and the supported ones),
-a wrong number of arguments (with the allowed count), a label used but not defined or defined
-twice, ``NEXT`` naming another loop, a one-line ``IF`` followed on its line by another statement,
-a number literal beyond what a variable holds, nesting deeper than :data:`MAX_NESTING`, a variable
-read but never assigned or assigned but never read (how a misspelt parameter shows up).
+program, the line, the column and the construct: an unknown keyword (with close matches), a wrong
+number of arguments (with the allowed count and the usage), a label used but not defined or
+defined twice, ``NEXT`` naming another loop, a one-line ``IF`` followed on its line by another
+statement, a number literal beyond what a variable holds, nesting deeper than :data:`MAX_NESTING`,
+``DIM ... AS`` an unknown type, a name read but never assigned (a misspelt keyword), a misspelt
+parameter assigned and never read (``UNIT = 16``).
 
-The program becomes a list of operations ``op(run, pc) -> next pc``; loops, ``IF``, ``GOTO`` and
-``GOSUB`` are jumps, so running a program needs no recursion and any jump is possible.
-Expressions become closures ``expr(run) -> value``; each arithmetic result is kept in the variable
-format (:func:`~cosim.controllers.trio.values.fit`).
+Variables are created on first assignment, as on the controller; ``DIM`` declares typed variables
+and arrays; ``CONSTANT`` and ``GLOBAL`` names are known to every program of a machine
+(:class:`~.expressions.Declarations`); ``INCLUDE "file"`` compiles another file's statements in
+place (its errors name that file).
+
+The program becomes a list of operations ``op(run, pc) -> next pc``; loops, ``IF``, ``GOTO``,
+``GOSUB`` and ``ON ... GOTO`` are jumps, so running a program needs no recursion.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from lark import Token, Tree
 
 from cosim.controllers.trio import keywords as kw
 from cosim.controllers.trio import operations as ops
-from cosim.controllers.trio.values import Value, fit, hex_literal, integer_part, literal
+from cosim.controllers.trio.commands import HANDLERS, not_modelled, setting
+from cosim.controllers.trio.expressions import MAX_NESTING, Declarations, ExpressionCompiler, _mods, pos
+from cosim.controllers.trio.printing import compile_input, compile_print
+from cosim.controllers.trio.runtime import BasicError, Compiled, store_variable
+from cosim.controllers.trio.syntax import parse
+from cosim.controllers.trio.values import DEFAULT_STRING_LENGTH, Datum, integer_part, literal, typed
 from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
-    from cosim.controllers.trio.basic import BasicRun
+    from cosim.controllers.trio.runtime import BasicRun
 
 Op = ops.Op
 Expr = ops.Expr
-#: Deepest nesting of blocks (IF, loops) and of expressions.
-MAX_NESTING = 64
 #: Arguments PWM_CONTROL takes after the mode, by mode (TN20-81).
 PWM_CONTROL_ARGS = {0: 0, 1: 0, 2: 4, 3: 4, 4: 0, 5: 0, 6: 0}
+#: Resolves ``INCLUDE "name"`` to (file name, text); None when the program has no file to look beside.
+Includer = Callable[[str], tuple[str, str]]
 
 
-@dataclass(frozen=True)
-class Compiled:
-    """A compiled program: operations, the program line of each, and the channels it names."""
-
-    ops: tuple[Op, ...]
-    lines: tuple[int, ...]
-    inputs: frozenset[int]
-    outputs: frozenset[int]
+def declarations_of(tree: Tree, into: Declarations, name: str) -> None:
+    """Collect the ``CONSTANT`` and ``GLOBAL`` names of ``tree`` (before any program is compiled)."""
+    collector = Compiler(name, declarations=into)
+    for node in tree.iter_subtrees_topdown():
+        if node.data in ("constant_stmt", "global_stmt"):
+            collector.declare(node)
 
 
-def _pos(node: Tree | Token) -> tuple[int, int]:
-    if isinstance(node, Token):
-        return node.line or 0, node.column or 0
-    return (node.meta.line, node.meta.column) if not node.meta.empty else (0, 0)
-
-
-class Compiler:
+class Compiler(ExpressionCompiler):
     """Checks and compiles one program (see the module docstring)."""
 
-    def __init__(self, name: str) -> None:
+    def __init__(self, name: str, *, declarations: Declarations | None = None, include: Includer | None = None
+                 ) -> None:
         self.name = name
+        self.file = name
+        self.declarations = declarations if declarations is not None else Declarations()
+        self.include = include
         self.ops: list[Op] = []
-        self.lines: list[int] = []
+        self.sources: list[tuple[str, int]] = []
         self.labels: dict[str, int] = {}
-        self.jumps: list[tuple[int, str, Tree | Token, bool]] = []  # (op index, label, node, gosub)
+        self.jumps: list[tuple[int, list[str], Tree | Token, str]] = []  # (op index, labels, node, kind)
         self.assigned: dict[str, tuple[int, int]] = {}
         self.read: dict[str, tuple[int, int]] = {}
+        self.arrays: dict[str, int] = {}
+        self.typed: set[str] = set()
         self.inputs: set[int] = set()
         self.outputs: set[int] = set()
-
-    def fail(self, node: Tree | Token, message: str) -> ConfigurationError:
-        line, column = _pos(node)
-        return ConfigurationError(f"{self.name} line {line}, column {column}: {message}")
+        self.included: list[str] = []
+        self._on_selectors: dict[int, Expr] = {}
 
     def compile(self, tree: Tree) -> Compiled:
+        for node in tree.iter_subtrees_topdown():  # names declared anywhere are known everywhere
+            if node.data in ("constant_stmt", "global_stmt"):
+                self.declare(node)
+            elif node.data == "dim_decl":
+                self._dim_shape(node)
         self.block(tree, 0)
-        for index, label, node, gosub in self.jumps:
-            if label not in self.labels:
+        for index, targets, node, kind in self.jumps:
+            missing = [t for t in targets if t not in self.labels]
+            if missing:
                 known = ", ".join(sorted(self.labels)) or "none"
-                raise self.fail(node, f"label {label} is not defined (labels: {known})")
-            self.ops[index] = ops.gosub(self.labels[label]) if gosub else ops.jump(self.labels[label])
+                raise self.fail(node, f"label {missing[0]} is not defined (labels: {known})")
+            pcs = [self.labels[t] for t in targets]
+            if kind == "goto":
+                self.ops[index] = ops.jump(pcs[0])
+            elif kind == "gosub":
+                self.ops[index] = ops.gosub(pcs[0])
+            elif kind in ("error_goto", "error_gosub"):
+                target, sub = pcs[0], kind == "error_gosub"
+                self.ops[index] = ops.action(lambda run, target=target, sub=sub: setattr(  # type: ignore[misc]
+                    run, "error_handler", (target, sub)))
+            else:
+                self.ops[index] = self._patched_on_jump(index, pcs, kind == "on_gosub")
         for var, (line, column) in self.read.items():
-            if var not in self.assigned:
+            if var not in self.assigned and var not in self.typed:
                 raise ConfigurationError(f"{self.name} line {line}, column {column}: {kw.unknown_name(var)} (not a "
                                          "keyword, nor a variable the program assigns)")
         for var, (line, column) in self.assigned.items():
-            if var not in self.read:
+            near = kw.misspelt_parameter(var)
+            if var not in self.read and near is not None:
                 raise ConfigurationError(f"{self.name} line {line}, column {column}: {kw.unknown_name(var)} "
-                                         "(assigned but never read: a misspelt keyword?)")
-        return Compiled(tuple(self.ops), tuple(self.lines), frozenset(self.inputs), frozenset(self.outputs))
+                                         f"(assigned but never read: a misspelt {near}?)")
+        return Compiled(tuple(self.ops), tuple(self.sources), frozenset(self.inputs), frozenset(self.outputs),
+                        dict(self.labels))
 
     def emit(self, node: Tree | Token, op: Op) -> int:
         self.ops.append(op)
-        self.lines.append(_pos(node)[0])
+        self.sources.append((self.file, pos(node)[0]))
         return len(self.ops) - 1
 
     # -- statements ---------------------------------------------------------------------------
@@ -99,14 +121,13 @@ class Compiler:
             raise self.fail(tree, f"blocks nested deeper than {MAX_NESTING} levels")
         nodes = [c for c in tree.children if isinstance(c, Tree)]
         for k, node in enumerate(nodes):
-            if node.data == "if_line" and k + 1 < len(nodes) and _pos(nodes[k + 1])[0] == node.meta.end_line:
+            if node.data == "if_line" and k + 1 < len(nodes) and pos(nodes[k + 1])[0] == node.meta.end_line:
                 raise self.fail(nodes[k + 1], "a one-line IF governs one statement; this one would run whatever "
                                               "the condition (write IF ... THEN, the statements, ENDIF)")
             self.statement(node, depth)
 
     def statement(self, node: Tree, depth: int) -> None:
-        handler = getattr(self, f"s_{node.data}")
-        handler(node, depth)
+        getattr(self, f"s_{node.data}")(node, depth)
 
     def s_label(self, node: Tree, depth: int) -> None:
         token = node.children[0]
@@ -118,72 +139,142 @@ class Compiler:
         self.labels[name] = len(self.ops)
 
     def s_assign(self, node: Tree, depth: int) -> None:
-        token, axis_mod, value_node = node.children
+        token, index_node, mods, value_node = node.children
+        assert isinstance(token, Token)
         name = str(token).upper()
+        axis_mod, proc_mod = _mods(mods)
         value = self.expr(value_node, 0)
+        if index_node is not None:
+            self._assign_indexed(node, token, name, index_node, axis_mod or proc_mod, value)
+            return
+        if name in self.declarations.constants or name in kw.CONSTANTS:
+            raise self.fail(token, f"{name} is a constant; it cannot be assigned")
+        if name in self.declarations.globals:
+            slot = self.declarations.globals[name]
+            self.emit(node, ops.action(lambda run: run.controller.set_vr(slot, value(run))))
+            return
+        if name in kw.PROCESS_PARAMS:
+            self._assign_process_param(node, token, name, axis_mod, proc_mod, value)
+            return
         if name in kw.WRITABLE:
-            if axis_mod is not None and name in ("WDOG", "TICKS"):
+            if proc_mod is not None:
+                raise self.fail(proc_mod, f"{name} is not a process parameter; it takes no PROC()")
+            if axis_mod is not None and name == "WDOG":
                 raise self.fail(token, f"{name} is not an axis parameter; write {name} = value without AXIS()")
-            if name == "TICKS":
-                self.emit(node, ops.action(lambda run: setattr(run.process, "ticks", value(run))))
-                return
             axis = self.axis(axis_mod)
-            self.emit(node, ops.action(lambda run: run.process.set(name, value(run), axis=axis(run))))
+
+            def set_parameter(run: BasicRun, pc: int) -> int:
+                process = run.process
+                process.origin = run.where
+                process.set(name, value(run), axis=axis(run))
+                return pc + 1
+
+            self.emit(node, set_parameter)
             return
         if name in kw.READABLE:
             hint = " (use DEFPOS)" if name in ("DPOS", "MPOS") else ""
             raise self.fail(token, f"{name} is read-only{hint}")
         if name in kw.KEYWORDS:
             raise self.fail(token, f"cannot assign to {name}")
-        if axis_mod is not None:
-            raise self.fail(token, kw.unknown_name(name) + " (AXIS() only modifies axis parameters)")
-        self.assigned.setdefault(name, _pos(token))
+        if axis_mod is not None or proc_mod is not None:
+            raise self.fail(token, kw.unknown_name(name) + " (AXIS() and PROC() only modify parameters)")
+        if name in self.arrays:
+            raise self.fail(token, f"{name} is an array; assign an element with {name}(index) = value")
+        self.assigned.setdefault(name, pos(token))
+        store = store_variable
 
         def assign(run: BasicRun, pc: int) -> int:
-            run.variables[name] = value(run)
+            store(run, name, value(run))
             return pc + 1
 
         self.emit(node, assign)
 
-    def s_index_assign(self, node: Tree, depth: int) -> None:
-        token, *args, value_node = node.children
-        name = str(token).upper()
-        if name != "VR":
-            raise self.fail(token, f"cannot assign to {token}(...); write VR(n) = value or TABLE(n, value)")
-        if len(args) != 1:
-            raise self.fail(token, kw.wrong_count(kw.FUNCTIONS["VR"], len(args)))
-        index, value = self.expr(args[0], 0), self.expr(value_node, 0)
-        self.emit(node, ops.action(lambda run: run.controller.set_vr(index(run), value(run))))
+    def _assign_process_param(self, node: Tree, token: Token, name: str, axis_mod: Tree | None,
+                              proc_mod: Tree | None, value: Expr) -> None:
+        if axis_mod is not None:
+            raise self.fail(token, f"{name} is not an axis parameter; write {name} = value without AXIS()")
+        if name not in kw.PROCESS_WRITABLE:
+            raise self.fail(token, f"{name} is read-only")
+        proc = self.proc(proc_mod)
+        self.emit(node, ops.action(lambda run: run.program_control.set_process_param(run, name, value(run),
+                                                                                      proc(run))))
+
+    def _assign_indexed(self, node: Tree, token: Token, name: str, index_node: Tree, mod: Tree | None,
+                        value: Expr) -> None:
+        args = [a for a in index_node.children if a is not None]
+        if mod is not None:
+            raise self.fail(mod, f"{name}(...) takes no AXIS() or PROC() modifier")
+        if name == "VR":
+            if len(args) != 1:
+                raise self.fail(token, kw.wrong_count(kw.FUNCTIONS["VR"], len(args)))
+            index = self.expr(args[0], 0)
+            self.emit(node, ops.action(lambda run: run.controller.set_vr(index(run), value(run))))
+            return
+        if name == "TABLE":
+            if len(args) != 1:
+                raise self.fail(token, kw.wrong_count(kw.FUNCTIONS["TABLE"], len(args)))
+            index = self.expr(args[0], 0)
+            self.emit(node, ops.action(lambda run: run.process.table(index(run), value(run))))
+            return
+        if name not in self.arrays:
+            raise self.fail(token, f"cannot assign to {token}(...); write VR(n) = value, TABLE(n, value), or DIM "
+                                   f"{token}(size) first")
+        element = self.index(name, [self.expr(a, 1) for a in args])
+        dims = self.arrays[name]
+        if len(args) != dims:
+            raise self.fail(node, f"{name} has {dims} dimension{'s' if dims > 1 else ''}; {len(args)} given")
+
+        def assign(run: BasicRun, pc: int) -> int:
+            k = element(run)
+            kind = run.types.get(name)
+            datum = value(run)
+            run.arrays[name][k] = datum if kind is None else typed(datum, kind[0], name, kind[1])
+            return pc + 1
+
+        self.emit(node, assign)
 
     def s_call(self, node: Tree, depth: int) -> None:
-        token, *args, axis_mod = node.children
+        token, *args, mods = node.children
         args = [a for a in args if a is not None]
         name = str(token).upper()
-        if name not in kw.COMMANDS:
+        if name not in kw.ALL_COMMANDS:
             if name in kw.FUNCTIONS:
                 raise self.fail(token, f"{name}(...) is a function, not a command; use it in an expression")
+            if name in self.arrays:
+                raise self.fail(token, f"{name}(...) is an array element; assign it with {name}(index) = value")
             raise self.fail(token, kw.unknown_command(str(token)))
-        self.command(node, kw.COMMANDS[name], args, axis_mod)
+        self.command(node, kw.ALL_COMMANDS[name], args, mods)
+
+    def s_string_call(self, node: Tree, depth: int) -> None:
+        token, text, *args = node.children
+        name = str(token).upper()
+        if name not in kw.ALL_COMMANDS:
+            raise self.fail(token, kw.unknown_command(str(token)))
+        string = Tree("string", [text], meta=node.meta)
+        self.command(node, kw.ALL_COMMANDS[name], [string, *[a for a in args if a is not None]], None)
 
     def s_bare(self, node: Tree, depth: int) -> None:
-        token, axis_mod = node.children
+        token, mods = node.children
         name = str(token).upper()
-        if name in kw.COMMANDS:
-            signature = kw.COMMANDS[name]
+        if name in kw.ALL_COMMANDS:
+            signature = kw.ALL_COMMANDS[name]
             if signature.low:
                 raise self.fail(token, f"{name} needs its arguments: {signature.usage}")
-            self.command(node, signature, [], axis_mod)
-        elif name in kw.READABLE:
+            self.command(node, signature, [], mods)
+        elif name in kw.READABLE or name in self.declarations.globals:
             raise self.fail(token, f"{name} is a parameter; write {name} = value")
         else:
             raise self.fail(token, kw.unknown_command(str(token)))
 
-    def command(self, node: Tree, signature: kw.Signature, args: list[Any], axis_mod: Tree | None) -> None:
+    def command(self, node: Tree, signature: kw.Signature, args: list[Any], mods: Tree | None) -> None:
         name = signature.name
+        axis_mod, proc_mod = _mods(mods)
         if not signature.accepts(len(args)):
             raise self.fail(node, kw.wrong_count(signature, len(args)))
         if axis_mod is not None and not signature.axis_modifier:
             raise self.fail(axis_mod, f"{name} takes no AXIS() modifier")
+        if proc_mod is not None:
+            raise self.fail(proc_mod, f"{name} takes no PROC() modifier")
         values = [self.expr(a, 0) for a in args]
         axis = self.axis(axis_mod)
         if name == "PWM_CONTROL" and isinstance(args[0], Tree) and args[0].data == "number":
@@ -192,23 +283,38 @@ class Compiler:
                 wanted = PWM_CONTROL_ARGS[mode] + 1
                 raise self.fail(node, f"number of PWM_CONTROL({mode}) arguments = {len(args)} is not allowed "
                                       f"(allowed: {wanted}, the mode and {wanted - 1} more)")
-        if name == "OP":
-            self._literal_channel(args[0], self.outputs)
-        self.emit(node, ops.command(name, values, axis))
+        if name == "OP" and len(args) == 2:
+            self.literal_channel(args[0], self.outputs)
+        handler = (HANDLERS[name] if name in HANDLERS else setting(name) if name in kw.SETTINGS
+                   else not_modelled(name))
+
+        def op(run: BasicRun, pc: int) -> int:
+            run.process.origin = run.where
+            run.pending = handler(run, [v(run) for v in values], axis(run))
+            return pc + 1
+
+        self.emit(node, op)
 
     def s_wait_idle(self, node: Tree, depth: int) -> None:
-        axis = self.axis(node.children[0])
+        axis = self._axis_only(node, "WAIT IDLE")
         self.emit(node, ops.wait(lambda run: run.process.wait_idle(axis=axis(run))))
 
     def s_wait_loaded(self, node: Tree, depth: int) -> None:
-        axis = self.axis(node.children[0])
+        axis = self._axis_only(node, "WAIT LOADED")
         self.emit(node, ops.wait(lambda run: run.process.wait_loaded(axis=axis(run))))
+
+    def _axis_only(self, node: Tree, what: str) -> Callable[[BasicRun], Any]:
+        axis_mod, proc_mod = _mods(node.children[0])
+        if proc_mod is not None:
+            raise self.fail(proc_mod, f"{what} takes AXIS(), not PROC()")
+        return self.axis(axis_mod)
 
     def s_wait_until(self, node: Tree, depth: int) -> None:
         condition = self.expr(node.children[0], 0)
+        truth = ops.truth
 
         def wait_until(run: BasicRun, pc: int) -> int:
-            if condition(run) != 0:
+            if truth(condition(run)):
                 return pc + 1
             run.pending = run.next_servo_tick()
             return pc  # checked again at the next servo tick
@@ -216,50 +322,152 @@ class Compiler:
         self.emit(node, wait_until)
 
     def s_goto(self, node: Tree, depth: int) -> None:
-        self.jumps.append((self.emit(node, ops.jump(-1)), str(node.children[0]).upper(), node.children[0], False))
+        self.jumps.append((self.emit(node, ops.jump(-1)), [str(node.children[0]).upper()], node.children[0], "goto"))
 
     def s_gosub(self, node: Tree, depth: int) -> None:
-        self.jumps.append((self.emit(node, ops.jump(-1)), str(node.children[0]).upper(), node.children[0], True))
+        self.jumps.append((self.emit(node, ops.jump(-1)), [str(node.children[0]).upper()], node.children[0],
+                           "gosub"))
+
+    def s_on_error(self, node: Tree, depth: int) -> None:
+        kind, token = node.children
+        self.jumps.append((self.emit(node, ops.jump(-1)), [str(token).upper()], token,
+                           "error_gosub" if kind.data == "kind_gosub" else "error_goto"))
+
+    def s_on_jump(self, node: Tree, depth: int) -> None:
+        selector, kind, *tokens = node.children
+        self._on_selectors[len(self.ops)] = self.expr(selector, 0)
+        self.jumps.append((self.emit(node, ops.jump(-1)), [str(t).upper() for t in tokens], tokens[0],
+                           "on_gosub" if kind.data == "kind_gosub" else "on_goto"))
+
+    def _patched_on_jump(self, index: int, pcs: list[int], sub: bool) -> Op:
+        return ops.on_jump(self._on_selectors.pop(index), pcs, sub=sub)
 
     def s_return_stmt(self, node: Tree, depth: int) -> None:
         self.emit(node, lambda run, pc: run.return_from_gosub())
 
     def s_print_stmt(self, node: Tree, depth: int) -> None:
-        parts: list[Callable[[BasicRun], str]] = []
-        ends_line = True
-        for child in node.children:
-            if child is None:
-                continue
-            if child.data == "print_item":
-                item = child.children[0]
-                if isinstance(item, Token) and item.type == "STRING":
-                    parts.append(ops.text(str(item)[1:-1]))
-                else:
-                    parts.append(ops.formatted(self.expr(item, 0)))
-                ends_line = True
-            else:
-                if child.data == "comma_sep":
-                    parts.append(lambda run: "\t")
-                ends_line = False
+        compile_print(self, node)
 
-        def print_line(run: BasicRun, pc: int) -> int:
-            run.print_text("".join(part(run) for part in parts), end=ends_line)
+    def s_input_stmt(self, node: Tree, depth: int) -> None:
+        compile_input(self, node, "INPUT")
+
+    def s_get_stmt(self, node: Tree, depth: int) -> None:
+        compile_input(self, node, "GET")
+
+    def s_linput_stmt(self, node: Tree, depth: int) -> None:
+        compile_input(self, node, "LINPUT")
+
+    def s_dim_stmt(self, node: Tree, depth: int) -> None:
+        for decl in node.children:
+            self._dim(decl)
+
+    def _dim_shape(self, decl: Tree) -> None:
+        token, index_node, _type_token, _length = decl.children
+        if index_node is not None:
+            self.arrays[str(token).upper()] = len([a for a in index_node.children if a is not None])
+        self.typed.add(str(token).upper())
+
+    def _dim(self, decl: Tree) -> None:
+        token, index_node, type_token, length_node = decl.children
+        name = str(token).upper()
+        if name in kw.KEYWORDS or name in self.declarations.constants or name in self.declarations.globals:
+            raise self.fail(token, f"DIM {name}: {name} is a keyword or a declared name, not a new variable")
+        kind = "FLOAT" if type_token is None else str(type_token).upper()
+        if kind not in kw.TYPES:
+            raise self.fail(type_token, f"DIM ... AS {type_token} is not a type (allowed: {', '.join(kw.TYPES)})")
+        if length_node is not None and kind != "STRING":
+            raise self.fail(type_token, f"DIM ... AS {kind}(...): only STRING takes a length")
+        length = (self.constant_value(length_node.children[0], "the length of a STRING") if length_node is not None
+                  else DEFAULT_STRING_LENGTH)
+        sizes_exprs = [self.expr(a, 0) for a in index_node.children if a is not None] if index_node is not None else []
+        self.assigned.setdefault(name, pos(token))
+        string_length = integer_part(length) if not isinstance(length, str) else DEFAULT_STRING_LENGTH
+
+        def dim(run: BasicRun, pc: int) -> int:
+            initial: Datum = "" if kind == "STRING" else 0
+            run.types[name] = (kind, string_length)
+            if sizes_exprs:
+                sizes = []
+                for size_expr in sizes_exprs:
+                    size = size_expr(run)
+                    n = integer_part(size) if not isinstance(size, str) else -1
+                    if not 1 <= n <= 1_000_000:
+                        raise BasicError(f"DIM {name} size = {n} is not allowed (allowed: 1..1000000)", 1)
+                    sizes.append(n)
+                total = 1
+                for n in sizes:
+                    total *= n
+                if total > 1_000_000:
+                    raise BasicError(f"DIM {name}: {total} elements are not allowed (allowed: at most 1000000)", 1)
+                run.array_sizes[name] = tuple(sizes)
+                run.arrays[name] = [initial] * total
+            else:
+                run.variables[name] = initial
             return pc + 1
 
-        self.emit(node, print_line)
+        self.emit(decl, dim)
 
-    def s_run_stmt(self, node: Tree, depth: int) -> None:
-        token, process_node = node.children
-        program = str(token)[1:-1]
-        process = None if process_node is None else self.expr(process_node, 0)
-        self.emit(node, ops.action(lambda run: run.run_program(program, None if process is None else process(run))))
+    def declare(self, node: Tree) -> None:
+        """Record a CONSTANT or GLOBAL declaration (its value must be known before the program runs)."""
+        token, value_node = node.children
+        assert isinstance(token, Token)
+        name = (str(token)[1:-1] if token.type == "STRING" else str(token)).upper()
+        what = "CONSTANT" if node.data == "constant_stmt" else "GLOBAL"
+        if not name or not name.replace("_", "a").isalnum() or not (name[0].isalpha() or name[0] == "_"):
+            raise self.fail(token, f"{what} {token}: the name must be a letter or _ followed by letters, digits, _")
+        if name in kw.KEYWORDS:
+            raise self.fail(token, f"{what} \"{name}\": {name} is a keyword")
+        value = self.constant_value(value_node, f"the value of {what} {name}")
+        if what == "CONSTANT":
+            known = self.declarations.constants.get(name)
+            if known is not None and known != value:
+                raise self.fail(token, f"CONSTANT {name} is declared twice with different values")
+            self.declarations.constants[name] = value
+        else:
+            index = integer_part(value) if not isinstance(value, str) else -1
+            if index < 0:
+                raise self.fail(value_node, f"GLOBAL {name}: the VR index must be a number >= 0")
+            self.declarations.globals[name] = index
+
+    def s_constant_stmt(self, node: Tree, depth: int) -> None:
+        self.declare(node)  # known from the start of the program (and of every program of the machine)
+
+    def s_global_stmt(self, node: Tree, depth: int) -> None:
+        self.declare(node)
+
+    def s_include_stmt(self, node: Tree, depth: int) -> None:
+        token = node.children[0]
+        target = str(token)[1:-1]
+        if self.include is None:
+            raise self.fail(token, f"INCLUDE \"{target}\": the program has no folder to find it in")
+        try:
+            file, text = self.include(target)
+        except ConfigurationError as exc:
+            raise self.fail(token, f"INCLUDE \"{target}\": {exc}") from None
+        if file in self.included or file == self.name or len(self.included) > 32:
+            raise self.fail(token, f"INCLUDE \"{target}\" includes itself (through {', '.join(self.included)})")
+        tree = parse(text, file)
+        outer = (self.name, self.file)
+        self.included.append(file)
+        self.name = self.file = file
+        try:
+            for sub in tree.iter_subtrees_topdown():
+                if sub.data in ("constant_stmt", "global_stmt"):
+                    self.declare(sub)
+                elif sub.data == "dim_decl":
+                    self._dim_shape(sub)
+            self.block(tree, depth + 1)
+        finally:
+            self.name, self.file = outer
+            self.included.pop()
 
     def s_repeat(self, node: Tree, depth: int) -> None:
         body, condition_node = node.children
         start = len(self.ops)
         self.block(body, depth + 1)
         condition = self.expr(condition_node, 0)
-        self.emit(condition_node, lambda run, pc: pc + 1 if condition(run) != 0 else start)
+        truth = ops.truth
+        self.emit(condition_node, lambda run, pc: pc + 1 if truth(condition(run)) else start)
 
     def s_while_loop(self, node: Tree, depth: int) -> None:
         condition_node, body = node.children
@@ -267,25 +475,33 @@ class Compiler:
         top = self.emit(node, ops.jump(-1))
         self.block(body, depth + 1)
         self.emit(node, ops.jump(top))
-        end = len(self.ops)
-        self.ops[top] = lambda run, pc: pc + 1 if condition(run) != 0 else end
+        self.ops[top] = ops.jump_unless(condition, len(self.ops))
 
     def s_for_loop(self, node: Tree, depth: int) -> None:
         token, start_node, stop_node, step_node, body, next_token = node.children
         var = str(token).upper()
         if next_token is not None and str(next_token).upper() != var:
             raise self.fail(next_token, f"NEXT {next_token} closes FOR {token}")
-        if var in kw.KEYWORDS:
+        if var in kw.KEYWORDS or var in self.declarations.constants:
             raise self.fail(token, f"cannot use {var} as a loop variable")
-        self.assigned.setdefault(var, _pos(token))
-        self.read.setdefault(var, _pos(token))
+        self.assigned.setdefault(var, pos(token))
+        self.read.setdefault(var, pos(token))
         start, stop = self.expr(start_node, 0), self.expr(stop_node, 0)
-        step = (lambda run: 1) if step_node is None else self.expr(step_node, 0)
+        step = ops.constant(1) if step_node is None else self.expr(step_node, 0)
+        load, store = self._loop_variable(var)
         init = self.emit(node, ops.jump(-1))
         self.block(body, depth + 1)
         next_op = self.emit(next_token if next_token is not None else body if not body.meta.empty else node,
-                            ops.for_next(var, init, init + 1))
-        self.ops[init] = ops.for_init(var, start, stop, step, next_op + 1)
+                            ops.for_next(var, init, init + 1, load, store))
+        self.ops[init] = ops.for_init(var, start, stop, step, next_op + 1, store)
+
+    def _loop_variable(self, var: str) -> tuple[Callable[[BasicRun, str], Datum],
+                                                Callable[[BasicRun, str, Datum], None]]:
+        if var in self.declarations.globals:
+            slot = self.declarations.globals[var]
+            return (lambda run, name: run.controller.vr(slot),
+                    lambda run, name, value: run.controller.set_vr(slot, value))
+        return (lambda run, name: run.variable(name)), store_variable
 
     def s_if_block(self, node: Tree, depth: int) -> None:
         condition_node, then_body, *rest = node.children
@@ -297,8 +513,7 @@ class Compiler:
             test = self.emit(cond_node, ops.jump(-1))
             self.block(body, depth + 1)
             ends.append(self.emit(node, ops.jump(-1)))
-            skip_to = len(self.ops)
-            self.ops[test] = ops.jump_unless(condition, skip_to)
+            self.ops[test] = ops.jump_unless(condition, len(self.ops))
         if else_body is not None:
             self.block(else_body, depth + 1)
         end = len(self.ops)
@@ -318,92 +533,3 @@ class Compiler:
         self.ops[test] = ops.jump_unless(condition, len(self.ops))
         self.statement(else_stmt, depth + 1)
         self.ops[skip] = ops.jump(len(self.ops))
-
-    # -- expressions --------------------------------------------------------------------------
-    def axis(self, axis_mod: Tree | None) -> Callable[[BasicRun], Value | None]:
-        if axis_mod is None:
-            return lambda run: None
-        return self.expr(axis_mod.children[0], 0)
-
-    def _literal_channel(self, node: Any, into: set[int]) -> None:
-        if isinstance(node, Tree) and node.data == "number":
-            value = literal(str(node.children[0]))
-            if isinstance(value, int) and 0 <= value < 64:
-                into.add(value)
-
-    def expr(self, node: Tree | Token, depth: int) -> Expr:
-        if depth > MAX_NESTING:
-            raise self.fail(node, f"expression nested deeper than {MAX_NESTING} levels")
-        if isinstance(node, Token):  # pragma: no cover - every token is wrapped in a rule
-            raise self.fail(node, f"cannot evaluate {node!r}")
-        kind, kids = node.data, node.children
-        if kind in ("number", "hexnumber"):
-            try:
-                value = literal(str(kids[0])) if kind == "number" else hex_literal(str(kids[0]))
-            except ConfigurationError as exc:
-                raise self.fail(node, str(exc)) from None
-            return lambda run: value
-        if kind == "ref":
-            return self.ref(node)
-        if kind in ("idle_ref", "loaded_ref"):
-            key = "IDLE" if kind == "idle_ref" else "LOADED"
-            axis = self.axis(kids[0])
-            return lambda run: fit(run.process.get(key, axis=axis(run)))
-        if kind == "func":
-            return self.function(node, depth)
-        if kind in ("sum", "term", "or_expr", "and_expr"):
-            first = self.expr(kids[0], depth + 1)
-            rest = [(ops.BINARY[str(kids[k]).upper()], self.expr(kids[k + 1], depth + 1))
-                    for k in range(1, len(kids), 2)]
-            return ops.chain(first, rest)
-        if kind in ("compare", "equal"):
-            a = self.expr(kids[0], depth + 1)
-            b = self.expr(kids[-1], depth + 1)
-            op = ops.BINARY[str(kids[1]) if kind == "compare" else "="]
-            return lambda run: op(a(run), b(run))
-        operand = self.expr(kids[0], depth + 1)
-        if kind == "neg":
-            return lambda run: fit(-operand(run))
-        if kind == "not_op":
-            return lambda run: ~integer_part(operand(run))
-        raise self.fail(node, f"cannot evaluate {kind}")  # pragma: no cover - the grammar has no other rules
-
-    def ref(self, node: Tree) -> Expr:
-        token, axis_mod = node.children
-        name = str(token).upper()
-        if name in kw.CONSTANTS:
-            if axis_mod is not None:
-                raise self.fail(token, f"{name} is a constant; it takes no AXIS()")
-            value = kw.CONSTANTS[name]
-            return lambda run: value
-        if name == "TICKS":
-            return lambda run: run.process.ticks
-        if name in kw.READABLE:
-            axis = self.axis(axis_mod)
-            return lambda run: fit(run.process.get(name, axis=axis(run)), name)
-        if name in kw.KEYWORDS:
-            raise self.fail(token, f"{name} is not a value here" + (
-                f"; write {kw.FUNCTIONS[name].usage}" if name in kw.FUNCTIONS else ""))
-        if axis_mod is not None:
-            raise self.fail(token, kw.unknown_name(name) + " (AXIS() only modifies axis parameters)")
-        self.read.setdefault(name, _pos(token))
-        return lambda run: run.variable(name)
-
-    def function(self, node: Tree, depth: int) -> Expr:
-        token, *args, axis_mod = node.children
-        args = [a for a in args if a is not None]
-        name = str(token).upper()
-        if name not in kw.FUNCTIONS:
-            if name in kw.COMMANDS:
-                raise self.fail(token, f"{name}(...) is a command, not a function")
-            raise self.fail(token, kw.unknown_function(str(token)))
-        signature = kw.FUNCTIONS[name]
-        if not signature.accepts(len(args)):
-            raise self.fail(token, kw.wrong_count(signature, len(args)))
-        if axis_mod is not None:
-            raise self.fail(axis_mod, f"{name} takes no AXIS() modifier")
-        argument = self.expr(args[0], depth + 1)
-        if name == "IN":
-            self._literal_channel(args[0], self.inputs)
-        function = ops.FUNCTIONS[name]
-        return lambda run: function(run, argument(run))

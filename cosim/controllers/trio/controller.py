@@ -1,43 +1,44 @@
 """The Trio EURO205X Motion Coordinator: servo cycle, parameters, TABLE, VR, I/O and commands.
 
-:class:`TrioController` owns the axes, TABLE and VR memory, the digital I/O, the console and WDOG,
-and runs the servo cycle as a SimPy process at ``k * SERVO_PERIOD`` (priority SERVO). Each servo
-tick, in this order:
+:class:`TrioController` owns the axes, TABLE and VR memory, the digital I/O, the channels, the
+console, WDOG and its job (``trio.job``), and runs the servo cycle at ``k * SERVO_PERIOD`` (priority
+SERVO; when a tick runs, and when it is computed in closed form instead, is :mod:`.servo`'s
+business). Each servo tick, in this order:
 
 1. latch MPOS of every axis (the pulses counted so far);
 2. move waiting ``PWM_CONTROL(3)`` loads into FIFOs that now have room;
-3. end moves whose last cycle was output; load buffered moves whose axes are free (:mod:`.buffer`);
-4. run one cycle of every move (a requested CANCEL first): demand positions, VP_SPEED, step
-   pulses (:mod:`.motion`);
-5. apply pending DEFPOS offsets (after loading moves: a move issued right after DEFPOS is
+3. limits and jog inputs (:mod:`.supervise`);
+4. end moves whose last cycle was output; load buffered moves whose axes are free (:mod:`.buffer`);
+5. run one cycle of every move (a requested CANCEL first): demand positions, VP_SPEED, step
+   pulses (:mod:`.motion`, :mod:`.linked`, :mod:`.datum`);
+6. apply pending DEFPOS / OFFPOS offsets (after loading moves: a move issued right after DEFPOS is
    loaded before the new position applies, as the Trio manual warns; ``WAIT UNTIL OFFPOS=0``);
-6. update speed-linked PWM marks from VP_SPEED of their link axis;
-7. check FE_LIMIT, record DPOS, MPOS, VP_SPEED, then release programs waiting for move-buffer
+   keep positions within REP_DIST;
+7. update speed-linked PWM marks from VP_SPEED of their link axis;
+8. check FE_LIMIT, record DPOS, MPOS, VP_SPEED, then release programs waiting for move-buffer
    space, for idle axes or for an empty next-move buffer.
 
 Commands come from programs (:class:`TrioProcess`, the BASIC interpreter); they take effect at
-the instant they are given, in zero simulated time. Moves are buffered one deep per axis (the
-running move and one more); a further move makes its program wait.
+the instant they are given, in zero simulated time. The motion commands are in
+:mod:`.motioncmds`, parameter access in :mod:`.parameters`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Generator, Sequence
 from fractions import Fraction
 from typing import Any
 
 from simpy.events import Event
 
 from cosim import validate
+from cosim.controllers.trio.axis import Axis
 from cosim.controllers.trio.buffer import MoveBuffers
 from cosim.controllers.trio.gate import GateFifo, toggled_entries
-from cosim.controllers.trio.io import Console, DigitalIo
-from cosim.controllers.trio.motion import Axis, Move
+from cosim.controllers.trio.io import Channel, Console, DigitalIo
+from cosim.controllers.trio.motioncmds import MotionCommands
 from cosim.controllers.trio.outputs import SettledSignal
+from cosim.controllers.trio.parameters import ParameterAccess, pwm_axes
 from cosim.controllers.trio.params import (
-    ATYPE_STEPPER_PWM,
-    ATYPE_VIRTUAL,
-    AXIS_PARAMS,
     DEFAULT_DIR_SETUP_NS,
     DEFAULT_IO_CHANNELS,
     DEFAULT_SERVO_PERIOD_US,
@@ -51,26 +52,25 @@ from cosim.controllers.trio.params import (
     PWM_CLOCK_NS,
     PWM_ENCODER_MODULUS,
     PWM_REGISTER_MAX,
-    READ_ONLY_AXIS_PARAMS,
-    SYSTEM_PARAMS,
+    STEPPER_ATYPES,
     check_servo_period_us,
     on_off,
-    unknown_name,
 )
-from cosim.controllers.trio.paths import ArcPath
 from cosim.controllers.trio.pwm import PwmGenerator, PwmMode, SpeedLink
 from cosim.controllers.trio.pwm_output import PwmOutput
+from cosim.controllers.trio.servo import ServoLoop
+from cosim.controllers.trio.supervise import before_moves, within_range, wrap
 from cosim.errors import ConfigurationError, TimingViolation
+from cosim.job import Job, JobState
 from cosim.kernel import Simulation
 from cosim.signals import PulseTrain, PwmPort, Signal, StepDirPort
-from cosim.timebase import Priority
 
 #: Arguments each PWM_CONTROL mode takes after the mode.
 PWM_CONTROL_ARGS = {0: (), 1: (), 2: ("multiplier", "offset", "limit value", "link axis"),
                     3: ("GT/LT", "ON/OFF", "table start", "table end"), 4: (), 5: (), 6: ()}
 
 
-class TrioController:
+class TrioController(MotionCommands, ParameterAccess):
     """A EURO205X with the PWM FPGA: axes 0..n-1, PWM and gating on axes 2 and 3.
 
     Parameters
@@ -128,13 +128,26 @@ class TrioController:
         #: The PWM output pins in the trace (``trio.axisN.pwm_out``), by axis.
         self.pwm_outputs = {n: PwmOutput(sim, f"{self.axes[n].prefix}.pwm_out", self.pwm_port(n),
                                          clock_ticks=clock_ticks) for n in PWM_AXES}
-        self.buffers = MoveBuffers(sim, self.axes)
+        self.buffers = MoveBuffers(sim, self.axes, period_s=self.period_s)
+        self._gates = [ax.gate for ax in self.axes.values() if ax.gate is not None]
+        self._pwms = [ax.pwm for ax in self.axes.values() if ax.pwm is not None]
         #: Running programs by process number, and the programs RUN can start by name.
         self.processes: dict[int, Any] = {}
         self.programs: dict[str, Any] = {}
         self.wired: set[int] = set()
-        self.ticks = 0
-        sim.process(self.servo_cycle())
+        #: The job: the processes a machine starts, until each has stopped (see :mod:`cosim.job`).
+        self.job = Job(sim, device)
+        self.system_values: dict[str, Any] = {}
+        self.flags = 0
+        self.channels: dict[int, Channel] = {}
+        self.regist_inputs = {n: n for n in self.axes}
+        self._trigger: Signal | None = None
+        #: When the servo ticks run (explicit, skipped at rest, or in closed form): see :mod:`.servo`.
+        self.servo = ServoLoop(self)
+        for ax in self.axes.values():
+            ax.sync = self.servo.sync
+            if ax.gate is not None:
+                ax.gate.sync = self.servo.sync
 
     @property
     def setup_ticks(self) -> int:
@@ -142,111 +155,72 @@ class TrioController:
         return self.dir_setup_ticks + self.pulse_width_ticks
 
     # -- the servo cycle ----------------------------------------------------------------------
-    def servo_cycle(self) -> Generator[Event, Any, None]:
-        """SimPy process: the servo interrupt at ``k * SERVO_PERIOD``."""
-        k = -(-self.sim.now // self.period_ticks)
-        while True:
-            yield self.sim.at(k * self.period_ticks, Priority.SERVO)
-            self._tick()
-            k += 1
+    @property
+    def ticks(self) -> int:
+        """Servo ticks so far (at 0, SERVO_PERIOD, ...), run or skipped."""
+        return self.servo.k_done + 1
+
+    def settled(self) -> bool:
+        """Nothing changes at the next servo tick unless a command changes it: every axis at rest and
+        recorded, no move running or buffered, no load waiting for FIFO space, no program waiting on the
+        servo cycle."""
+        if self.buffers.busy:
+            return False
+        for axis in self.axes.values():
+            if not axis.quiet:
+                return False
+        return all(not gate.has_waiting for gate in self._gates)
 
     def _tick(self) -> None:
         now = self.sim.now
-        self.ticks += 1
-        axes = self.axes.values()
-        for axis in axes:
-            axis.sample_mpos()
-        for axis in axes:
-            if axis.gate is not None:
-                axis.gate.retry_waiting()
-        self.buffers.load(now)
-        self.buffers.run_cycle(now, self.period_ticks, self.period_s)
-        for axis in axes:
+        awake = [axis for axis in self.axes.values() if not axis.quiet]
+        for axis in awake:
+            axis.sample_mpos(now)
+        for gate in self._gates:
+            if gate.has_waiting:
+                gate.retry_waiting()
+        for axis in self.axes.values():
+            if axis.supervised:
+                before_moves(self, axis)
+        buffers = self.buffers
+        if buffers.pending:
+            buffers.load(now)
+        buffers.run_cycle(now, self.period_ticks, self.period_s)
+        awake = [axis for axis in self.axes.values() if not axis.quiet]
+        for axis in awake:
             axis.apply_offset()
-        for axis in axes:
-            if axis.pwm is not None and axis.pwm.link is not None:
-                axis.pwm.servo_update(self.axes[axis.pwm.link.link_axis].vp_speed)
-        for axis in axes:
-            self._check_following_error(axis)
+            if not within_range(axis):
+                wrap(axis)
+        for pwm in self._pwms:
+            link = pwm.link
+            if link is not None:
+                link_axis = self.axes[link.link_axis]
+                pwm.servo_update_ratio(link_axis.vnum, link_axis.vden)
+        for axis in awake:
+            params = axis.params
+            if params["SERVO"] and params["ATYPE"] in STEPPER_ATYPES and axis.following_error_exceeds():
+                self._following_error(axis)
             axis.record()
-        self.buffers.release()
+            axis.settle(now)
+        buffers.release()
 
-    def _check_following_error(self, axis: Axis) -> None:
-        if not (axis.stepper and axis.params["SERVO"]):
-            return
+    def _following_error(self, axis: Axis) -> None:
+        """TRM (SERVO): the following error bit is set in AXISSTATUS and the enable relay is forced OFF; here
+        the run also stops with the error (the job stops: LIMIT)."""
+        axis.fe_exceeded = True
+        self.wdog.request(0)
         error = axis.dpos - axis.mpos_sampled
-        if abs(error) > axis.params["FE_LIMIT"]:
-            origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
-            raise TimingViolation(
-                f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
-                f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
-                "motion error)")
+        self.job.stop(JobState.LIMIT, f"{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT")
+        origin = f"{axis.current.origin}: " if axis.current is not None and axis.current.origin else ""
+        raise TimingViolation(
+            f"{origin}{axis.prefix}: following error {float(error):g} units exceeds FE_LIMIT = "
+            f"{float(axis.params['FE_LIMIT']):g} at t = {self.sim.now} ns (the controller stops with a "
+            "motion error)")
 
     # -- axes and parameters ------------------------------------------------------------------
     def axis(self, number: object, *, where: str = "") -> Axis:
         """Axis ``number`` (ConfigurationError naming the allowed axes if there is none)."""
         return self.axes[validate.integer(number, "axis", low=0, high=len(self.axes) - 1, where=where, whole=True)]
-
-    def set_param(self, name: str, value: object, *, axis: int | None = None) -> None:
-        """Write parameter ``name`` (vendor name) of ``axis`` (or a controller parameter)."""
-        key = name.upper()
-        if key == "WDOG":
-            self.wdog.request(on_off(value, "WDOG"))
-            return
-        if key in SYSTEM_PARAMS or key in READ_ONLY_AXIS_PARAMS:
-            hint = " (use DEFPOS)" if key in ("DPOS", "MPOS") else ""
-            raise ConfigurationError(f"{key} is read-only{hint}")
-        if key not in AXIS_PARAMS:
-            raise ConfigurationError(unknown_name(key))
-        spec = AXIS_PARAMS[key]
-        ax = self.axis(0 if axis is None else axis)
-        if spec.pwm_only and not ax.has_pwm:
-            raise ConfigurationError.out_of_range(f"axis of {key}", ax.number, _pwm_axes())
-        converted = spec.convert(value, key, "")
-        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and not ax.has_pwm:
-            raise ConfigurationError.out_of_range(f"axis of ATYPE={ATYPE_STEPPER_PWM}", ax.number, _pwm_axes())
-        was_stepper = ax.stepper
-        old = ax.params[key]
-        ax.params[key] = converted
-        if key == "ATYPE" and ax.stepper and not was_stepper:
-            ax.became_stepper()
-        if key == "ATYPE" and converted == ATYPE_STEPPER_PWM and old != ATYPE_STEPPER_PWM:
-            assert ax.gate is not None
-            raw = (int(self.sim.rng.integers(0, PWM_ENCODER_MODULUS)) if self.encoder_at_atype is None
-                   else self.encoder_at_atype)
-            ax.gate.preset_encoder(raw)
-        elif key == "INVERT_STEP":
-            ax.set_invert_step(int(converted))
-        elif key == "PWM_CYCLE":
-            assert ax.pwm is not None
-            ax.pwm.set_cycle(int(converted))
-        elif key == "PWM_MARK":
-            assert ax.pwm is not None
-            ax.pwm.set_mark(int(converted))
-
-    def get_param(self, name: str, *, axis: int | None = None) -> Fraction:
-        """Read parameter ``name`` of ``axis`` (or a controller parameter) now, exactly."""
-        key = name.upper()
-        if key == "WDOG":
-            return Fraction(int(self.wdog.value))
-        if key == "SERVO_PERIOD":
-            return Fraction(self.servo_period_us)
-        ax = self.axis(0 if axis is None else axis)
-        if key in AXIS_PARAMS:
-            if AXIS_PARAMS[key].pwm_only and not ax.has_pwm:
-                raise ConfigurationError.out_of_range(f"axis of {key}", ax.number, _pwm_axes())
-            return Fraction(ax.params[key])
-        now = self.sim.now
-        values: dict[str, Any] = {
-            "DPOS": lambda: ax.dpos, "MPOS": lambda: ax.mpos_at(now), "VP_SPEED": lambda: ax.vp_speed,
-            "OFFPOS": lambda: ax.offpos, "IDLE": lambda: -1 if ax.idle else 0,
-            "LOADED": lambda: -1 if self.buffers.loaded((ax.number,)) else 0,
-            "FE": lambda: ax.dpos - ax.mpos_at(now),
-            "PWM_ENCODER": lambda: self._gate(ax.number, "PWM_ENCODER").encoder_value(),
-        }
-        if key not in values:
-            raise ConfigurationError(unknown_name(key))
-        return Fraction(values[key]())
 
     # -- TABLE ----------------------------------------------------------------------------------
     def table(self, start: object, *values: object) -> None:
@@ -268,75 +242,14 @@ class TrioController:
         """``VR(n)``: read a global variable (0 until written)."""
         return self.vr_memory[self._vr_index(index)]
 
-    def set_vr(self, index: object, value: int | Fraction) -> None:
-        """``VR(n) = value``: write a global variable (shared by every process)."""
+    def set_vr(self, index: object, value: object) -> None:
+        """``VR(n) = value``: write a global variable (shared by every process); VR holds numbers."""
+        if isinstance(value, str) or not isinstance(value, int | Fraction):
+            raise ConfigurationError(f"VR({index}) = {value!r} is not allowed (allowed: a number; VR holds numbers)")
         self.vr_memory[self._vr_index(index)] = value
 
     def _vr_index(self, index: object) -> int:
         return validate.integer(index, "VR index", low=0, high=len(self.vr_memory) - 1, whole=True)
-
-    # -- motion commands ----------------------------------------------------------------------
-    def defpos(self, axes: Sequence[int], positions: Sequence[object]) -> None:
-        """``DEFPOS(p1, ...)`` for ``axes``: applied by the next servo cycle (see OFFPOS)."""
-        _check_count("DEFPOS", positions, axes)
-        for a, p in zip(axes, positions, strict=False):
-            self.axis(a).defpos(validate.exact(p, "DEFPOS position"))
-
-    def move(self, axes: Sequence[int], values: Sequence[object], *, absolute: bool, origin: str = "") -> Event:
-        """``MOVE`` / ``MOVEABS`` on ``axes`` (the first is the base axis): an event once it is buffered."""
-        command = "MOVEABS" if absolute else "MOVE"
-        _check_count(command, values, axes)
-        group = self._group(axes[:len(values)], command)
-        move = Move(group, command, tuple(validate.exact(v, f"{command} value") for v in values), origin)
-        return self.buffers.add(move)
-
-    def movecirc(self, axes: Sequence[int], values: Sequence[object], *, origin: str = "") -> Event:
-        """``MOVECIRC(end1, end2, centre1, centre2, direction)`` on the first two of ``axes``.
-
-        End and centre are relative to the start [units]; direction 0 is anticlockwise, 1 clockwise.
-        """
-        if len(values) != 5:
-            raise ConfigurationError.out_of_range("number of MOVECIRC values", len(values),
-                                                  "5 (end1, end2, centre1, centre2, direction)")
-        if len(axes) < 2:
-            raise ConfigurationError.out_of_range("number of BASE axes for MOVECIRC", len(axes),
-                                                  ">= 2 (the arc is in the plane of the first two)")
-        group = self._group(axes[:2], "MOVECIRC")
-        e1, e2, c1, c2 = (validate.exact(v, "MOVECIRC value") for v in values[:4])
-        direction = int(validate.flag(values[4], "MOVECIRC direction", true=(1,), allowed="0 (anticlockwise) or "
-                                      "1 (clockwise)"))
-        path = ArcPath.plan((e1, e2), (c1, c2), clockwise=direction == 1, tolerance=1 / self.axes[group[0]].units)
-        return self.buffers.add(Move(group, "MOVECIRC", (e1, e2, c1, c2, Fraction(direction)), origin, path=path))
-
-    def forward(self, axis: int, *, reverse: bool = False, origin: str = "") -> Event:
-        """``FORWARD`` / ``REVERSE``: a continuous move of ``axis`` at its SPEED until ``CANCEL``."""
-        command = "REVERSE" if reverse else "FORWARD"
-        return self.buffers.add(Move(self._group((axis,), command), command, (), origin))
-
-    def _group(self, axes: Sequence[int], command: str) -> tuple[int, ...]:
-        group = tuple(self.axis(a).number for a in axes)
-        base = self.axes[group[0]]
-        validate.positive(base.params["SPEED"], f"SPEED of axis {base.number} for {command}")
-        for a in group:
-            if a in self.wired and self.axes[a].params["ATYPE"] == ATYPE_VIRTUAL:
-                raise ConfigurationError(
-                    f"{command} on axis {a}: its step/direction output drives a plant, but ATYPE = 0 (virtual) "
-                    "gives no step pulses (allowed: ATYPE = 1 or 35 before moving the axis)")
-        return group
-
-    def cancel(self, axes: Sequence[int]) -> None:
-        """``CANCEL``: the running moves of ``axes`` decelerate at DECEL from the next servo tick."""
-        self.buffers.cancel(tuple(self.axis(a).number for a in axes))
-
-    def wait_idle(self, axes: Sequence[int]) -> Event:
-        """An event that succeeds at the servo tick where every axis in ``axes`` is idle."""
-        group = tuple(self.axis(a).number for a in axes)
-        return self.buffers.wait(lambda: self.buffers.idle(group))
-
-    def wait_loaded(self, axes: Sequence[int]) -> Event:
-        """An event that succeeds at the servo tick where no move waits behind the running one on ``axes``."""
-        group = tuple(self.axis(a).number for a in axes)
-        return self.buffers.wait(lambda: self.buffers.loaded(group))
 
     # -- PWM_CONTROL --------------------------------------------------------------------------
     def pwm_control(self, axis: int, mode: object, *args: object) -> Event | None:
@@ -348,9 +261,10 @@ class TrioController:
             An axis without the feature, an unknown mode, a wrong number of arguments, a comparison
             flag other than 0/1, TABLE bounds, end before start, a limit outside 0..65535.
         """
+        self.servo.wake()
         ax = self.axis(axis)
         if not ax.has_pwm:
-            raise ConfigurationError.out_of_range("PWM_CONTROL axis", ax.number, _pwm_axes())
+            raise ConfigurationError.out_of_range("PWM_CONTROL axis", ax.number, pwm_axes())
         number = validate.integer(mode, "PWM_CONTROL mode", low=0, high=max(PWM_CONTROL_ARGS), whole=True)
         wanted = PWM_CONTROL_ARGS[number]
         if len(args) != len(wanted):
@@ -405,14 +319,14 @@ class TrioController:
     def _gate(self, axis: int, what: str) -> GateFifo:
         gate = self.axes[axis].gate
         if gate is None:
-            raise ConfigurationError.out_of_range(f"{what} axis", axis, _pwm_axes())
+            raise ConfigurationError.out_of_range(f"{what} axis", axis, pwm_axes())
         return gate
 
     def pwm(self, axis: int) -> PwmGenerator:
         """The PWM generator of a PWM axis."""
         pwm = self.axis(axis).pwm
         if pwm is None:
-            raise ConfigurationError.out_of_range("PWM axis", axis, _pwm_axes())
+            raise ConfigurationError.out_of_range("PWM axis", axis, pwm_axes())
         return pwm
 
     def gate(self, axis: int) -> GateFifo:
@@ -442,7 +356,58 @@ class TrioController:
         step, direction = ax.ensure_outputs()
         return StepDirPort(step, direction, active_delay=self.pulse_width_ticks)
 
-    # -- digital I/O ------------------------------------------------------------------------------
+    # -- digital I/O, channels, flags ----------------------------------------------------------------
+    def read_input(self, channel: object) -> int:
+        """An input as a program sees it (1 ON, 0 OFF), INVERT_IN applied."""
+        return self.io.read_input(channel)
+
+    def read_input_signal(self, axis: int) -> Signal:
+        """The registration input of ``axis`` (digital input ``regist_inputs[axis]``, by default the axis number)."""
+        return self.io.input(self.regist_inputs.get(axis, axis))
+
+    def channel(self, number: object) -> Channel:
+        """Communication channel ``number`` (0..255): PRINT #n writes to the console, INPUT/GET #n read what
+        :meth:`Channel.feed` gave it."""
+        n = validate.integer(number, "channel", low=0, high=255, whole=True)
+        if n not in self.channels:
+            self.channels[n] = Channel(self.sim, n)
+        return self.channels[n]
+
+    def flag(self, number: object) -> int:
+        """``FLAG(n)``: one of the 32 flags (1 or 0)."""
+        n = validate.integer(number, "FLAG number", low=0, high=31, whole=True)
+        return (self.flags >> n) & 1
+
+    def set_flag(self, number: object, state: object) -> None:
+        """``FLAG(n, ON/OFF)``."""
+        n = validate.integer(number, "FLAG number", low=0, high=31, whole=True)
+        self.flags = self.flags | (1 << n) if on_off(state, "FLAG state") else self.flags & ~(1 << n)
+
+    def set_flags(self, value: object) -> None:
+        """``FLAGS(value)``: all 32 flags at once."""
+        self.flags = validate.integer(value, "FLAGS value", low=0, high=(1 << 32) - 1, whole=True)
+
+    def clear_vr(self) -> None:
+        """``CLEAR``: every VR back to 0."""
+        self.vr_memory[:] = [0] * len(self.vr_memory)
+
+    def trigger(self, *, origin: str = "") -> None:
+        """``TRIGGER``: a marker in the trace (``trio.trigger`` counts them; on the controller it starts the
+        SCOPE capture, which is not modelled)."""
+        if self._trigger is None:
+            self._trigger = Signal(self.sim, f"{self.device}.trigger", kind="int",
+                                   description="TRIGGER commands so far (a marker: the SCOPE start)")
+        self._trigger.set(self._trigger.value + 1)
+
+    def analog_input(self, channel: object, *, where: str = "") -> int:
+        """``AIN(n)``: not modelled: 0, listed in the notes."""
+        self.sim.notes.not_modelled(self.device, f"AIN({channel})", 0, where=where)
+        return 0
+
+    def motion_error(self) -> int:
+        """``MOTION_ERROR``: 1 while an axis has a motion error (a following error beyond FE_LIMIT)."""
+        return int(any(axis.fe_exceeded for axis in self.axes.values()))
+
     def input(self, channel: object) -> Signal:
         """The signal of digital input ``channel`` (``trio.in.N``): drive it to feed ``IN(n)``."""
         return self.io.input(channel)
@@ -461,21 +426,12 @@ class TrioController:
         return out + self.io.outputs()
 
     def inputs(self) -> list[Signal]:
-        """Every signal the controller reads: the digital inputs ``trio.in.0`` .. ``trio.in.31``.
+        """Every signal the controller reads: the digital inputs ``trio.in.0`` .. ``trio.in.31`` and the Z markers
+        ``trio.axisN.z_mark`` in use (:meth:`Axis.ensure_z_mark`).
 
         Input signals are created on first use (a program creates those its ``IN(n)`` names when it
         starts; :meth:`input` creates one), so a trace holds only the inputs in use; asking for all
         of them here creates them all.
         """
-        return [self.io.input(n) for n in range(self.io.channels)]
-
-
-def _pwm_axes() -> str:
-    return ", ".join(map(str, PWM_AXES)) + " (the axes with the PWM feature)"
-
-
-def _check_count(command: str, values: Sequence[object], axes: Sequence[int]) -> None:
-    if not values or len(values) > len(axes):
-        raise ConfigurationError.out_of_range(f"number of {command} values", len(values),
-                                              f"1..{len(axes)} (one per BASE axis)")
-
+        return [self.io.input(n) for n in range(self.io.channels)] + [
+            a.z_mark for a in self.axes.values() if a.z_mark is not None]

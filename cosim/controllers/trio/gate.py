@@ -35,7 +35,6 @@ from fractions import Fraction
 from math import ceil, floor
 from typing import TYPE_CHECKING
 
-import numpy as np
 from simpy.events import Event
 
 from cosim.controllers.trio.counter import StepCounter
@@ -94,6 +93,36 @@ class GateEntry:
         return diff > 0 if self.greater else diff < 0
 
 
+def first_hit(entry: GateEntry, before: int, sign: int, first: int, count: int) -> int | None:
+    """The first pulse ``k`` in ``first..count-1`` of a segment after which the count satisfies ``entry``.
+
+    The count after pulse ``k`` is ``before + sign * (k + 1 - first)`` (``before``: the count after
+    pulse ``first - 1``). Whether it satisfies the entry changes only where the wrap-safe difference
+    crosses 0 or the wrap (``+-2**28``), so the pulses just at those crossings are the only
+    candidates besides ``first``: the answer in O(1), whatever the segment's size.
+
+    Examples
+    --------
+    >>> e = GateEntry(Fraction(110), 1760, True, 1)
+    >>> first_hit(e, 1700, 1, 0, 100), first_hit(e, 1761, 1, 0, 5), first_hit(e, 1800, -1, 0, 100)
+    (60, 0, 0)
+    >>> first_hit(e, 1700, 1, 0, 50) is None, first_hit(e, 1760, -1, 0, 100) is None
+    (True, True)
+    """
+    d0 = wrapped_difference(before, entry.threshold)  # the difference before pulse `first`
+    candidates = {first}
+    for edge in (0, _HALF, -_HALF):
+        # difference after pulse k: d0 + sign * (k + 1 - first); it reaches edge + e at k = ...
+        for e in (-1, 0, 1):
+            k = first - 1 + sign * (edge + e - d0)
+            if first <= k < count:
+                candidates.add(k)
+    for k in sorted(candidates):
+        if entry.satisfied(before + sign * (k + 1 - first)):
+            return k
+    return None
+
+
 def toggled_entries(positions: Sequence[Fraction], units: Fraction, *, greater: bool,
                     first_state: int) -> list[GateEntry]:
     """The entries of one load: the ON/OFF state toggles entry by entry from ``first_state``."""
@@ -138,8 +167,12 @@ class GateFifo:
                                  description="gate entries passed before they were loaded so far (FIFO starvation)")
 
     # -- PWM_ENCODER --------------------------------------------------------------------------
+    #: Brings the servo ticks before now up to date (set by the controller; see :mod:`.servo`).
+    sync: Callable[[], None] = staticmethod(lambda: None)
+
     def encoder_value(self, t: int | None = None) -> int:
         """Raw PWM_ENCODER (0 .. 2**29-1) at ``t`` (default: now)."""
+        self.sync()
         return self.encoder.value(self.sim.now if t is None else t) % PWM_ENCODER_MODULUS
 
     def preset_encoder(self, raw: int) -> None:
@@ -163,6 +196,11 @@ class GateFifo:
             self._waiting.append((entries, done))
             self.waiting_level.set(self.waiting_level.value + len(entries))
         return done
+
+    @property
+    def has_waiting(self) -> bool:
+        """Loads wait for FIFO space."""
+        return bool(self._waiting)
 
     def retry_waiting(self) -> None:
         """Servo cycle: move waiting loads in, oldest first, while they fit."""
@@ -220,17 +258,14 @@ class GateFifo:
     def _schedule(self, first: int) -> None:
         """Schedule the firing of the head at the first pulse ``>= first`` that satisfies it."""
         enc = self.encoder
-        if first >= enc.count:
+        count = enc.count
+        if first >= count:
             return
-        head = self.entries[0]
-        counts = enc.after_pulse(first - 1) + enc.sign * np.arange(1, enc.count - first + 1, dtype=np.int64)
-        diff = (counts - head.threshold + _HALF) % PWM_ENCODER_MODULUS - _HALF
-        hits = np.flatnonzero(diff > 0 if head.greater else diff < 0)
-        if not hits.size:
+        k = first_hit(self.entries[0], enc.after_pulse(first - 1), enc.sign, first, count)
+        if k is None:
             return
-        k = first + int(hits[0])
         plan_id = self._plan_id
-        self.sim.call_at(int(enc.times()[k]), Priority.SERVO, lambda: self._on_pulse(plan_id, k))
+        self.sim.call_at(enc.t0 + (k * enc.duration) // count, Priority.SERVO, lambda: self._on_pulse(plan_id, k))
 
     def _on_pulse(self, plan_id: int, k: int) -> None:
         if plan_id != self._plan_id:

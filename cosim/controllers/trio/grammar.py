@@ -1,14 +1,29 @@
-"""The grammar of the Trio BASIC subset (lark, LALR).
+"""Text to syntax tree: the grammar of Trio BASIC (lark, LALR), built once on first use.
 
 Keywords are case-insensitive; an apostrophe or ``REM`` starts a comment, also after code;
 statements are separated by new lines or colons; a label is a name and a colon alone on its
 line. The text reaching the parser has ``\\n`` line ends only (:func:`normalise_lines` maps every
 line end Python knows, so line numbers match what an editor shows). Operator lists are flat
-(``a + b - c`` is one node with its operators), so a long sum is not a deep tree. Kept in Python
-so it ships with the package.
+(``a + b - c`` is one node with its operators), so a long sum is not a deep tree.
+
+The grammar is generic where the language is: any ``NAME``, ``NAME(args)``, ``NAME = value``,
+each with ``AXIS(n)`` / ``PROC(n)`` modifiers, and ``NAME "text", args`` (``RUN "PROG", 3``,
+``STOP "PROG"``) is a statement the parser accepts; what a name means (a command, a parameter, a
+variable), how many arguments it takes and whether it is modelled is decided by the compiler
+(:mod:`.compiler`), which names the construct in its messages. Only the statements with a syntax of
+their own have rules: ``PRINT``/``INPUT``/``GET``/``LINPUT`` with ``#channel``, ``DIM ... AS``,
+``CONSTANT``, ``GLOBAL``, ``INCLUDE``, ``ON BASICERROR``, ``ON ... GOTO/GOSUB``, ``WAIT``, the loops
+and ``IF``. So a statement the manual documents is never a syntax error.
+
+The LALR parser is built on the first :func:`parser` call and kept (building it costs tens of
+milliseconds: never at import time).
 """
 
 from __future__ import annotations
+
+from functools import cache
+
+from lark import Lark
 
 GRAMMAR = r"""
 start: _sep* (_stmt _sep+)*
@@ -17,25 +32,42 @@ _sep: _NL | ":"
 
 _stmt: _simple | repeat | while_loop | for_loop | if_block | if_line | label
 
-_simple: assign | index_assign | call | bare | wait_idle | wait_loaded | wait_until
-       | goto | gosub | return_stmt | print_stmt | run_stmt
+_simple: assign | call | bare | string_call | wait_idle | wait_loaded | wait_until | goto | gosub
+       | return_stmt | print_stmt | input_stmt | get_stmt | linput_stmt | dim_stmt | constant_stmt
+       | global_stmt | include_stmt | on_error | on_jump
 
 label: LABEL
-assign: NAME [axis_mod] _EQ expr
-index_assign: NAME "(" _args ")" _EQ expr
-call: NAME "(" [_args] ")" [axis_mod]
-bare: NAME [axis_mod]
-wait_idle: _WAIT _IDLE [axis_mod]
-wait_loaded: _WAIT _LOADED [axis_mod]
+assign: NAME [index] mods _EQ expr
+call: NAME "(" [_args] ")" mods
+bare: NAME mods
+string_call: NAME STRING (_COMMA expr)*
+mods: (axis_mod | proc_mod)*
+index: "(" _args ")"
+wait_idle: _WAIT _IDLE mods
+wait_loaded: _WAIT _LOADED mods
 wait_until: _WAIT _UNTIL expr
 goto: _GOTO NAME
 gosub: _GOSUB NAME
 return_stmt: _RETURN
-print_stmt: _PRINT [print_item (print_sep print_item)* print_sep?]
-print_item: expr | STRING
+print_stmt: (_PRINT | _QUERY) [channel] [print_item (print_sep print_item)* print_sep?]
+channel: "#" atom _COMMA
+print_item: expr [print_format]
+print_format: "[" expr [_COMMA expr] "]"
 print_sep: _COMMA -> comma_sep
          | ";" -> semicolon_sep
-run_stmt: _RUN STRING [_COMMA expr]
+input_stmt: _INPUT [channel] [STRING (_COMMA | ";")] target (_COMMA target)*
+get_stmt: _GET [channel] target
+linput_stmt: _LINPUT [channel] target
+target: NAME [index]
+dim_stmt: _DIM dim_decl (_COMMA dim_decl)*
+dim_decl: NAME [index] [_AS NAME [index]]
+constant_stmt: _CONSTANT (STRING | NAME) (_COMMA | _EQ) expr
+global_stmt: _GLOBAL (STRING | NAME) (_COMMA | _EQ) expr
+include_stmt: _INCLUDE STRING
+on_error: _ON _BASICERROR jump_kind NAME
+on_jump: _ON expr jump_kind NAME (_COMMA NAME)*
+jump_kind: _GOTO -> kind_goto
+         | _GOSUB -> kind_gosub
 repeat: _REPEAT _sep+ body _UNTIL expr
 while_loop: _WHILE expr _sep+ body _WEND
 for_loop: _FOR NAME _EQ expr _TO expr [_STEP expr] _sep+ body _NEXT [NAME]
@@ -44,6 +76,7 @@ elseif: _ELSEIF expr _THEN _sep+ body
 if_line: _IF expr _THEN _simple [_ELSE _simple]
 body: (_stmt _sep+)*
 axis_mod: _AXIS "(" expr ")"
+proc_mod: _PROC "(" expr ")"
 _args: expr (_COMMA expr)*
 
 ?expr: or_expr
@@ -55,16 +88,19 @@ _args: expr (_COMMA expr)*
            | comparison _EQ sum -> equal
            | sum
 ?sum: term (ADD term)*
-?term: factor (MUL factor)*
+?term: pow_expr (MUL pow_expr)*
+?pow_expr: factor (POW factor)*
 ?factor: "-" factor -> neg
        | "+" factor
        | atom
 ?atom: NUMBER -> number
      | HEXNUM -> hexnumber
-     | NAME [axis_mod] -> ref
-     | _IDLE [axis_mod] -> idle_ref
-     | _LOADED [axis_mod] -> loaded_ref
-     | NAME "(" [_args] ")" [axis_mod] -> func
+     | STRING -> string
+     | NAME mods -> ref
+     | _ON mods -> on_const
+     | _IDLE mods -> idle_ref
+     | _LOADED mods -> loaded_ref
+     | NAME "(" [_args] ")" mods -> func
      | "(" expr ")"
 
 _WAIT: "WAIT"i
@@ -84,15 +120,27 @@ _ELSE: "ELSE"i
 _ELSEIF: "ELSEIF"i
 _ENDIF: "ENDIF"i
 _AXIS: "AXIS"i
+_PROC: "PROC"i
 _GOTO: "GOTO"i
 _GOSUB: "GOSUB"i
 _RETURN: "RETURN"i
 _PRINT: "PRINT"i
-_RUN: "RUN"i
+_QUERY: "?"
+_INPUT: "INPUT"i
+_GET: "GET"i
+_LINPUT: "LINPUT"i
+_DIM: "DIM"i
+_AS: "AS"i
+_CONSTANT: "CONSTANT"i
+_GLOBAL: "GLOBAL"i
+_INCLUDE: "INCLUDE"i
+_ON: "ON"i
+_BASICERROR: "BASICERROR"i
 _NOT: "NOT"i
 LOGIC_AND: "AND"i
 LOGIC_OR: "OR"i | "XOR"i
 MUL: "*" | "/" | "MOD"i
+POW: "^"
 ADD: "+" | "-"
 CMP: "<=" | ">=" | "<>" | "<" | ">"
 _EQ: "="
@@ -111,6 +159,22 @@ REMARK: /REM(?![a-z0-9_])[^\n]*/i
 %ignore REMARK
 %ignore /[ \t]+/
 """
+
+#: How the parser's terminals read in a syntax error message.
+TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXNUM": "a $hex number",
+             "STRING": "a \"string\"", "LABEL": "a label", "LPAR": "(", "RPAR": ")", "COMMA": ",", "_COMMA": ",",
+             "COLON": ":", "SEMICOLON": ";", "MINUS": "-", "PLUS": "+", "_EQ": "=", "CMP": "a comparison",
+             "ADD": "+ or -", "MUL": "* / MOD", "POW": "^", "LOGIC_AND": "AND", "LOGIC_OR": "OR XOR",
+             "LSQB": "[", "RSQB": "]", "__ANON_0": "#"}
+
+
+@cache
+def parser() -> Lark:
+    """The LALR parser of :data:`GRAMMAR`, built on the first call and kept (and cached on disk by
+    :func:`cosim.controllers.grammars.lark_parser`, so a new process loads it instead of building it)."""
+    from cosim.controllers.grammars import lark_parser
+
+    return lark_parser(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 
 
 def normalise_lines(text: str) -> str:

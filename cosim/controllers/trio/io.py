@@ -28,6 +28,8 @@ from cosim.controllers.trio.params import on_off
 from cosim.signals import Signal
 
 if TYPE_CHECKING:
+    from simpy.events import Event
+
     from cosim.kernel import Simulation
 
 #: Every console line is also logged here (INFO), for a runner that shows or stores a run's log.
@@ -55,6 +57,7 @@ class DigitalIo:
         self.first_output = first_output
         self._inputs: dict[int, Signal] = {}
         self._outputs: dict[int, SettledSignal] = {}
+        self._inverted: set[int] = set()
 
     def _input_channel(self, channel: object) -> int:
         return validate.integer(channel, "input", low=0, high=self.channels - 1, whole=True)
@@ -64,12 +67,12 @@ class DigitalIo:
                                 allowed=f"{self.first_output}..{self.channels - 1} (0..{self.first_output - 1} "
                                         "are inputs only)")
 
-    def input(self, channel: object) -> Signal:
-        """The signal of input ``channel`` (``trio.in.N``), created on first use."""
+    def input(self, channel: object, *, initial: int = 0) -> Signal:
+        """The signal of input ``channel`` (``trio.in.N``), created on first use (at ``initial``)."""
         n = self._input_channel(channel)
         signal = self._inputs.get(n)
         if signal is None:
-            signal = self._inputs[n] = Signal(self.sim, f"{self.device}.in.{n}", kind="bit",
+            signal = self._inputs[n] = Signal(self.sim, f"{self.device}.in.{n}", kind="bit", initial=initial,
                                               description=f"digital input {n} (IN({n}))")
         return signal
 
@@ -85,8 +88,24 @@ class DigitalIo:
         return out
 
     def read_input(self, channel: object) -> int:
-        """``IN(n)``: 1 (ON) or 0 (OFF)."""
-        return int(self.input(channel).value)
+        """``IN(n)``: 1 (ON) or 0 (OFF), inverted where ``INVERT_IN(n, ON)`` asked for it."""
+        signal = self.input(channel)
+        level = 1 if signal.value else 0
+        return level ^ 1 if self._inverted and int(signal.name.rsplit(".", 1)[1]) in self._inverted else level
+
+    def invert_input(self, channel: object, state: object) -> None:
+        """``INVERT_IN(n, ON/OFF)``: a program reads input ``n`` inverted (the signal is what the wire carries)."""
+        n = self._input_channel(channel)
+        if on_off(state, f"INVERT_IN({n}) state"):
+            self._inverted.add(n)
+        else:
+            self._inverted.discard(n)
+
+    def write_pattern(self, pattern: object) -> None:
+        """``OP(value)``: outputs 8..31 at once from the bits 8..31 of ``value``."""
+        bits = validate.integer(pattern, "OP bit pattern", low=0, high=(1 << self.channels) - 1, whole=True)
+        for n in range(self.first_output, self.channels):
+            self._output(n).request((bits >> n) & 1)
 
     def write_output(self, channel: object, state: object) -> None:
         """``OP(n, state)``: set output ``n`` ON (1, or TRUE) or OFF (0), settled at the end of the instant."""
@@ -106,6 +125,58 @@ class DigitalIo:
     def outputs(self) -> list[Signal]:
         """The output signals created so far."""
         return [self._outputs[n].signal for n in sorted(self._outputs)]
+
+
+class Channel:
+    """A communication channel (serial port, Motion Perfect channel...): text arriving for INPUT, GET, KEY.
+
+    Parameters
+    ----------
+    sim : Simulation
+    number : int
+        The channel number programs write with ``#``.
+    """
+
+    def __init__(self, sim: Simulation, number: int) -> None:
+        self.sim = sim
+        self.number = number
+        self.buffer = ""
+        self._arrival = sim.env.event()
+
+    def feed(self, text: str) -> None:
+        """Characters arrive now (``\r`` or ``\n`` ends a line)."""
+        self.buffer += text
+        arrival, self._arrival = self._arrival, self.sim.env.event()
+        arrival.succeed()
+
+    @property
+    def waiting(self) -> bool:
+        """A character waits to be read (``KEY``)."""
+        return bool(self.buffer)
+
+    def read_char(self) -> int | None:
+        """The code of the next character (``GET``), or None when none waits."""
+        if not self.buffer:
+            return None
+        char, self.buffer = self.buffer[0], self.buffer[1:]
+        return ord(char)
+
+    def read_line(self) -> str | None:
+        """The next line without its end (``INPUT``, ``LINPUT``), or None while no line end has arrived."""
+        ends = [k for k in (self.buffer.find("\r"), self.buffer.find("\n")) if k >= 0]
+        if not ends:
+            return None
+        end = min(ends)
+        line = self.buffer[:end]
+        rest = self.buffer[end + 1:]
+        if self.buffer[end] == "\r" and rest.startswith("\n"):
+            rest = rest[1:]
+        self.buffer = rest
+        return line
+
+    def arrival(self) -> Event:
+        """An event that succeeds when more characters arrive."""
+        return self._arrival
 
 
 @dataclass(frozen=True)
@@ -149,6 +220,11 @@ class Console:
         self.sim.trace.write_line(self.sim.now, f"{self.device}.proc{process}", f"{program}:{line}  {text}")
         self.count.set(len(self.lines))
         LOG.info("t = %d ticks [%d] %s:%d  %s", self.sim.now, process, program, line, text)
+
+    def error(self, *, process: int, text: str) -> None:
+        """A run-time error message on the console (not a PRINT line: ``trio.print`` does not count it)."""
+        self.sim.trace.write_line(self.sim.now, f"{self.device}.proc{process}", text)
+        LOG.info("t = %d ticks [%d] %s", self.sim.now, process, text)
 
     def text(self) -> str:
         """Every line as ``t [ms]  process  program:line  text``, one per line."""

@@ -1,8 +1,16 @@
-"""The vocabulary of the modelled Trio BASIC: commands, functions, names, and what each takes.
+"""The vocabulary of Trio BASIC: commands, functions, parameters, constants, and what each takes.
 
-Every keyword a program may use is listed here with the number of arguments it takes, so a
-program with an unknown keyword or a wrong argument count is refused before it runs, with the
-allowed keywords or counts in the message.
+Every keyword of the Motion Coordinator Technical Reference Manual (TRM chapter 8) that a program
+may write is listed here, with the number of arguments it takes and what the model does with it:
+
+* **modelled** commands and functions act (a move, an output, a string function...);
+* **settings** commands (``SETCOM``, ``SCOPE``, ``AUTORUN``...) are accepted, do nothing that
+  changes timing, and are listed in the run's notes as "set, not modelled" with their arguments;
+* **motion not modelled** (``MHELICAL``, ``ADDAX``...) are accepted by the compiler (they are the
+  language) and stop the program with a message naming the command when it is reached, rather
+  than moving nothing silently.
+
+A name that is none of these is refused before the program runs, with the close matches.
 """
 
 from __future__ import annotations
@@ -46,57 +54,179 @@ class Signature:
         return count >= self.low and (self.high is None or count <= self.high)
 
 
-#: Commands used as statements (``NAME(args)`` or a bare ``NAME``).
-COMMANDS: dict[str, Signature] = {s.name: s for s in (
-    Signature("BASE", 1, None, "BASE(axis, axis, ...)"),
-    Signature("TABLE", 2, None, "TABLE(start, value, value, ...)"),
-    Signature("PWM_CONTROL", 1, 5, "PWM_CONTROL(mode, ...)", True),
-    Signature("DEFPOS", 1, None, "DEFPOS(position, ...)", True),
-    Signature("MOVE", 1, None, "MOVE(distance, ...)", True),
-    Signature("MOVEABS", 1, None, "MOVEABS(position, ...)", True),
-    Signature("MOVECIRC", 5, 5, "MOVECIRC(end1, end2, centre1, centre2, direction)"),
-    Signature("FORWARD", 0, 0, "FORWARD", True),
-    Signature("REVERSE", 0, 0, "REVERSE", True),
-    Signature("CANCEL", 0, 0, "CANCEL", True),
-    Signature("WA", 1, 1, "WA(ms)"),
-    Signature("OP", 2, 2, "OP(output, ON/OFF)"),
-)}
+def _sigs(*rows: tuple[str, int, int | None, str] | tuple[str, int, int | None, str, bool]) -> dict[str, Signature]:
+    return {row[0]: Signature(*row) for row in rows}
+
+
+#: Commands used as statements (``NAME(args)``, a bare ``NAME`` or ``NAME "text", args``), modelled.
+COMMANDS: dict[str, Signature] = _sigs(
+    ("BASE", 1, None, "BASE(axis, axis, ...)"),
+    ("TABLE", 2, None, "TABLE(start, value, value, ...)"),
+    ("PWM_CONTROL", 1, 5, "PWM_CONTROL(mode, ...)", True),
+    ("DEFPOS", 1, None, "DEFPOS(position, ...)", True),
+    ("MOVE", 1, None, "MOVE(distance, ...)", True),
+    ("MOVEABS", 1, None, "MOVEABS(position, ...)", True),
+    ("MOVECIRC", 5, 5, "MOVECIRC(end1, end2, centre1, centre2, direction)"),
+    ("MOVEMODIFY", 1, 1, "MOVEMODIFY(position)", True),
+    ("FORWARD", 0, 0, "FORWARD", True),
+    ("REVERSE", 0, 0, "REVERSE", True),
+    ("CANCEL", 0, 1, "CANCEL or CANCEL(1)", True),
+    ("RAPIDSTOP", 0, 1, "RAPIDSTOP"),
+    ("DATUM", 1, 1, "DATUM(sequence 0..6)", True),
+    ("CONNECT", 2, 2, "CONNECT(ratio, driving axis)", True),
+    ("CAMBOX", 5, 7, "CAMBOX(start, end, table multiplier, link distance, link axis[, link option[, link pos]])",
+     True),
+    ("CAM", 4, 4, "CAM(start, end, table multiplier, distance)", True),
+    ("MOVELINK", 5, 7, "MOVELINK(distance, link dist, link acc, link dec, link axis[, link option[, link pos]])",
+     True),
+    ("REGIST", 1, 5, "REGIST(mode)", True),
+    ("TRIGGER", 0, 0, "TRIGGER"),
+    ("WA", 1, 1, "WA(ms)"),
+    ("OP", 1, 2, "OP(output, ON/OFF) or OP(bit pattern)"),
+    ("RUN", 1, 2, "RUN \"program\"[, process]"),
+    ("STOP", 0, 2, "STOP or STOP \"program\"[, process]"),
+    ("HALT", 0, 0, "HALT"),
+    ("PROCESS", 0, 0, "PROCESS"),
+    ("CLEAR", 0, 0, "CLEAR"),
+    ("CLEAR_BIT", 2, 2, "CLEAR_BIT(bit, vr)"),
+    ("SET_BIT", 2, 2, "SET_BIT(bit, vr)"),
+    ("FLAG", 1, 2, "FLAG(flag, ON/OFF)"),
+    ("FLAGS", 1, 1, "FLAGS(value)"),
+    ("INVERT_IN", 2, 2, "INVERT_IN(input, ON/OFF)"),
+
+)
+
+#: Commands the model accepts and lists as "set, not modelled" (communications, set-up, tools).
+SETTINGS: dict[str, Signature] = _sigs(
+    ("SETCOM", 5, 7, "SETCOM(baud rate, data bits, stop bits, parity, port[, mode[, variable]])"),
+    ("OPEN", 1, None, "OPEN #channel ..."),
+    ("CLOSE", 0, None, "CLOSE #channel"),
+    ("SCOPE", 0, None, "SCOPE(ON/OFF, period, table start, table end, parameters...)"),
+    ("AUTORUN", 0, 0, "AUTORUN"),
+    ("DEFKEY", 1, None, "DEFKEY(...)"),
+    ("CURSOR", 1, 1, "CURSOR(position)"),
+    ("EPROM", 0, 0, "EPROM"),
+    ("POWER_UP", 0, 1, "POWER_UP"),
+    ("COMPILE", 0, 0, "COMPILE"),
+    ("SELECT", 0, 1, "SELECT \"program\""),
+    ("LIST", 0, 1, "LIST"),
+    ("NEW", 0, 1, "NEW \"program\""),
+    ("DEL", 0, 1, "DEL \"program\""),
+    ("COPY", 0, 2, "COPY \"program\" \"new name\""),
+    ("RENAME", 0, 2, "RENAME \"program\" \"new name\""),
+    ("LOCK", 0, 1, "LOCK(code)"),
+    ("UNLOCK", 0, 1, "UNLOCK(code)"),
+    ("DISPLAY", 0, 1, "DISPLAY = value"),
+    ("ENABLE_OP", 1, 1, "ENABLE_OP(mask)"),
+    ("PSWITCH", 1, 7, "PSWITCH(switch, enable[, axis, output, state, set position, reset position])"),
+    ("READPACKET", 1, None, "READPACKET(...)"),
+    ("CHANNEL_WRITE", 1, None, "CHANNEL_WRITE(...)"),
+    ("FILE", 0, None, "FILE ..."),
+    ("AOUT", 1, 2, "AOUT(channel, value)"),
+    ("AOUT0", 0, 1, "AOUT0 = value"),
+    ("AOUT1", 0, 1, "AOUT1 = value"),
+    ("DISABLE_GROUP", 1, None, "DISABLE_GROUP(axis, ...)"),
+    ("LOOKUP", 2, 2, "LOOKUP(format, entry)"),
+    ("STEPLINE", 0, 2, "STEPLINE"),
+    ("TROFF", 0, 1, "TROFF"),
+    ("TRON", 0, 0, "TRON"),
+    ("FRAME", 0, 1, "FRAME = value"),
+    ("SEND", 1, None, "SEND(...)"),
+)
+
+#: Motion commands of the manual without a model here: accepted, and an error naming the command when reached.
+MOTION_NOT_MODELLED: dict[str, Signature] = _sigs(
+    ("MHELICAL", 6, 8, "MHELICAL(end1, end2, centre1, centre2, direction, distance3[, ...])", True),
+    ("MHELICALSP", 6, 8, "MHELICALSP(...)", True),
+    ("MSPHERICAL", 5, 6, "MSPHERICAL(...)", True),
+    ("MOVETANG", 1, 2, "MOVETANG(position)", True),
+    ("MOVESP", 1, None, "MOVESP(distance, ...)", True),
+    ("MOVEABSSP", 1, None, "MOVEABSSP(position, ...)", True),
+    ("MOVECIRCSP", 5, 5, "MOVECIRCSP(...)", True),
+    ("ADDAX", 1, 1, "ADDAX(axis)", True),
+    ("ADD_DAC", 1, 1, "ADD_DAC(axis)", True),
+    ("REGIST_SPEED", 0, 0, "REGIST_SPEED", True),
+    ("B_SPLINE", 4, 6, "B_SPLINE(...)", True),
+    ("BACKLASH", 4, 4, "BACKLASH(on/off, distance, speed, accel)", True),
+    ("ACC", 1, 1, "ACC(rate) (use ACCEL)", True),
+    ("DEC", 1, 1, "DEC(rate) (use DECEL)", True),
+    ("DLINK", 1, None, "DLINK(function, ...) (later firmware)", True),
+)
 
 #: Functions used in expressions (``NAME(args)``).
-FUNCTIONS: dict[str, Signature] = {s.name: s for s in (
-    Signature("TABLE", 1, 1, "TABLE(n)"),
-    Signature("VR", 1, 1, "VR(n)"),
-    Signature("ABS", 1, 1, "ABS(x)"),
-    Signature("INT", 1, 1, "INT(x)"),
-    Signature("SGN", 1, 1, "SGN(x)"),
-    Signature("SQR", 1, 1, "SQR(x)"),
-    Signature("IN", 1, 1, "IN(input)"),
-    Signature("READ_OP", 1, 1, "READ_OP(output)"),
-    Signature("OP", 1, 1, "OP(output)"),
-)}
+FUNCTIONS: dict[str, Signature] = _sigs(
+    ("TABLE", 1, 1, "TABLE(n)"),
+    ("VR", 1, 1, "VR(n)"),
+    ("ABS", 1, 1, "ABS(x)"),
+    ("INT", 1, 1, "INT(x)"),
+    ("FRAC", 1, 1, "FRAC(x)"),
+    ("SGN", 1, 1, "SGN(x)"),
+    ("SQR", 1, 1, "SQR(x)"),
+    ("SIN", 1, 1, "SIN(radians)"),
+    ("COS", 1, 1, "COS(radians)"),
+    ("TAN", 1, 1, "TAN(radians)"),
+    ("ATAN", 1, 1, "ATAN(x)"),
+    ("ATAN2", 2, 2, "ATAN2(y, x)"),
+    ("ASIN", 1, 1, "ASIN(x)"),
+    ("ACOS", 1, 1, "ACOS(x)"),
+    ("EXP", 1, 1, "EXP(x)"),
+    ("LN", 1, 1, "LN(x)"),
+    ("IN", 0, 2, "IN(input) or IN(first, last)"),
+    ("READ_OP", 1, 2, "READ_OP(output) or READ_OP(first, last)"),
+    ("OP", 1, 1, "OP(output)"),
+    ("KEY", 0, 0, "KEY or KEY #channel"),
+    ("READ_BIT", 2, 2, "READ_BIT(bit, vr)"),
+    ("FLAG", 1, 1, "FLAG(flag)"),
+    ("CHR", 1, 1, "CHR(code)"),
+    ("HEX", 1, 1, "HEX(value)"),
+    ("STR", 1, 2, "STR(value[, width])"),
+    ("VAL", 1, 1, "VAL(string)"),
+    ("LEN", 1, 1, "LEN(string)"),
+    ("LEFT", 2, 2, "LEFT(string, count)"),
+    ("RIGHT", 2, 2, "RIGHT(string, count)"),
+    ("MID", 2, 3, "MID(string, start[, count])"),
+    ("UCASE", 1, 1, "UCASE(string)"),
+    ("LCASE", 1, 1, "LCASE(string)"),
+    ("INSTR", 2, 3, "INSTR([start, ]string, search)"),
+    ("AIN", 1, 1, "AIN(channel)"),
+    ("MOTION_ERROR", 0, 0, "MOTION_ERROR"),
+)
 
-#: Names a program can read in expressions (parameters, constants, process parameters).
+#: Process parameters (``NAME`` or ``NAME PROC(n)``).
+PROCESS_PARAMS: dict[str, str] = {
+    "TICKS": "process counter, decremented every servo cycle (read/write)",
+    "PROC_STATUS": "0 stopped, 1 running, 2 stepping, 3 paused (read only)",
+    "PROCNUMBER": "the process the program runs on (read only)",
+    "ERROR_LINE": "the line of the last run-time error (read only)",
+    "RUN_ERROR": "the number of the last run-time error (read only)",
+    "INDEVICE": "the channel INPUT and GET read by default",
+    "OUTDEVICE": "the channel PRINT writes to by default",
+    "PMOVE": "TRUE while a move of the process waits for the axes' buffers (read only)",
+}
+PROCESS_WRITABLE = frozenset({"TICKS", "INDEVICE", "OUTDEVICE"})
+
+#: System parameters besides :data:`SYSTEM_PARAMS` that are stored and listed as not modelled.
+SYSTEM_STORED: dict[str, int] = {"SCOPE_POS": 0, "LAST_AXIS": 3, "POS_OFFSET": 0, "NEG_OFFSET": 0,
+                                 "ERROR_AXIS": -1, "SYSTEM_ERROR": 0, "VERSION": 0, "FREE": 47104,
+                                 "NIO": 32, "TSIZE": 16000, "CONTROL": 205, "D_ZONE": 0, "BATTERY_LOW": 0}
+
+#: Names a program can read as values.
 CONSTANTS: dict[str, int] = {"ON": ON, "OFF": OFF, "TRUE": TRUE, "FALSE": FALSE}
-PROCESS_PARAMS: dict[str, str] = {"TICKS": "process counter, decremented every servo cycle (read/write)"}
-READABLE = frozenset(AXIS_PARAMS) | frozenset(READ_ONLY_AXIS_PARAMS) | frozenset(SYSTEM_PARAMS) | frozenset(
-    PROCESS_PARAMS)
-WRITABLE = frozenset(AXIS_PARAMS) | {"WDOG"} | frozenset(PROCESS_PARAMS)
+READABLE = (frozenset(AXIS_PARAMS) | frozenset(READ_ONLY_AXIS_PARAMS) | frozenset(SYSTEM_PARAMS)
+            | frozenset(PROCESS_PARAMS) | frozenset(SYSTEM_STORED) | {"PI"})
+WRITABLE = frozenset(AXIS_PARAMS) | {"WDOG"} | PROCESS_WRITABLE | {"OFFPOS"}
 
 #: Words of the grammar itself.
-STATEMENT_WORDS = frozenset({"AXIS", "WAIT", "IDLE", "LOADED", "UNTIL", "REPEAT", "WHILE", "WEND", "FOR", "TO",
-                             "STEP", "NEXT", "IF", "THEN", "ELSE", "ELSEIF", "ENDIF", "GOTO", "GOSUB", "RETURN",
-                             "PRINT", "RUN", "AND", "OR", "XOR", "NOT", "MOD", "REM"})
+STATEMENT_WORDS = frozenset({"AXIS", "PROC", "WAIT", "IDLE", "LOADED", "UNTIL", "REPEAT", "WHILE", "WEND", "FOR",
+                             "TO", "STEP", "NEXT", "IF", "THEN", "ELSE", "ELSEIF", "ENDIF", "GOTO", "GOSUB",
+                             "RETURN", "PRINT", "INPUT", "GET", "LINPUT", "DIM", "AS", "CONSTANT", "GLOBAL",
+                             "INCLUDE", "BASICERROR", "AND", "OR", "XOR", "NOT", "MOD", "REM"})
+#: Types of ``DIM ... AS``.
+TYPES = ("INTEGER", "FLOAT", "BOOLEAN", "STRING")
 
-#: Trio keywords the model refuses on purpose, with the reason.
-NOT_MODELLED: dict[str, str] = {
-    "DATUM": "its datum sequences (the DATUM_IN input, CREEP speed, which switch edge zeroes the position) are "
-             "not in the facts at hand; home with REVERSE, WAIT UNTIL IN(n) = ON, CANCEL, WAIT IDLE, DEFPOS(0)",
-    "MERGE": "moves run rest to rest in this model",
-    "STOP": "a program ends at its last line; STOP of another program is not modelled",
-}
-
-KEYWORDS = frozenset(COMMANDS) | frozenset(FUNCTIONS) | READABLE | frozenset(CONSTANTS) | STATEMENT_WORDS | {
-    "WDOG"}
+ALL_COMMANDS: dict[str, Signature] = {**SETTINGS, **MOTION_NOT_MODELLED, **COMMANDS}
+KEYWORDS = (frozenset(ALL_COMMANDS) | frozenset(FUNCTIONS) | READABLE | frozenset(CONSTANTS) | STATEMENT_WORDS
+            | {"WDOG"})
 
 
 def _close(name: str, known: frozenset[str] | list[str]) -> str:
@@ -105,22 +235,51 @@ def _close(name: str, known: frozenset[str] | list[str]) -> str:
 
 
 def unknown_command(name: str) -> str:
-    """Message for a statement keyword the model does not know (close matches and the supported commands)."""
-    upper = name.upper()
-    if upper in NOT_MODELLED:
-        return f"{upper} is not modelled: {NOT_MODELLED[upper]}"
-    return (f"unknown keyword {name}{_close(name, KEYWORDS)} (supported commands: "
-            f"{', '.join(sorted(COMMANDS))}; see docs/trio.md)")
+    """Message for a statement keyword the model does not know (with close matches)."""
+    return f"unknown keyword {name}{_close(name, KEYWORDS)} (not a Trio BASIC command; see docs/trio.md)"
 
 
 def unknown_function(name: str) -> str:
     """Message for a function the model does not know."""
-    return f"unknown keyword {name}{_close(name, KEYWORDS)} (supported functions: {', '.join(sorted(FUNCTIONS))})"
+    return f"unknown keyword {name}{_close(name, KEYWORDS)} (not a Trio BASIC function; see docs/trio.md)"
 
 
 def unknown_name(name: str) -> str:
     """Message for a name that is neither a keyword nor a variable the program assigns."""
     return f"unknown keyword {name}{_close(name, KEYWORDS)}"
+
+
+def misspelt_parameter(name: str) -> str | None:
+    """The writable parameter ``name`` differs from by one letter (inserted, missing or replaced), if any.
+
+    A variable that is assigned and never read under such a name is almost always a misspelt
+    parameter (``UNIT = 16``); the controller would create it silently.
+
+    Examples
+    --------
+    >>> misspelt_parameter("UNIT"), misspelt_parameter("SPEED1"), misspelt_parameter("I")
+    ('UNITS', None, None)
+    """
+    upper = name.upper()
+    if not upper.isalpha() and not upper.replace("_", "").isalpha():
+        return None
+    for known in sorted(AXIS_PARAMS):
+        if abs(len(known) - len(upper)) > 1 or known == upper:
+            continue
+        if _one_letter_apart(upper, known):
+            return known
+    return None
+
+
+def _one_letter_apart(a: str, b: str) -> bool:
+    if len(a) == len(b):
+        diff = [(x, y) for x, y in zip(a, b, strict=True) if x != y]
+        return len(diff) == 1 and diff[0][0].isalpha() and diff[0][1].isalpha()
+    short, long = (a, b) if len(a) < len(b) else (b, a)
+    for k in range(len(long)):
+        if long[:k] + long[k + 1:] == short:
+            return long[k].isalpha()
+    return False
 
 
 def wrong_count(signature: Signature, count: int) -> str:

@@ -40,6 +40,8 @@ DEFAULT_SERVO_PERIOD_US = 1000
 ATYPE_VIRTUAL = 0
 ATYPE_STEPPER = 1
 ATYPE_STEPPER_PWM = 35
+#: The ATYPEs that emit step pulses.
+STEPPER_ATYPES = (ATYPE_STEPPER, ATYPE_STEPPER_PWM)
 #: Divisor of the speed-link formula of PWM_CONTROL(2) (``VP_SPEED * multiplier / 100000 + offset``).
 SPEED_LINK_DIVISOR = 100_000
 #: Default size of TABLE memory [entries] (not stated in the note: a model parameter).
@@ -92,6 +94,9 @@ class ParamSpec:
         One line for humans.
     pwm_only : bool
         Only on axes with the PWM feature (:data:`PWM_AXES`).
+    acts : bool
+        The model uses the value; otherwise it is checked, stored, readable back and listed as
+        "set, not modelled".
     """
 
     name: str
@@ -101,6 +106,7 @@ class ParamSpec:
     unit: str = ""
     doc: str = ""
     pwm_only: bool = False
+    acts: bool = True
 
 
 _REGISTER = f"integer 0..{PWM_REGISTER_MAX}"
@@ -131,21 +137,95 @@ def _atype(value: object, name: str, where: str) -> Number:
                            allowed=ATYPES)
 
 
-#: Writable axis parameters.
+def _number(value: object, name: str, where: str) -> Number:
+    return validate.exact(value, name, where=where)
+
+
+def _input_channel(value: object, name: str, where: str) -> Number:
+    allowed = f"-1 (none) or an input 0..{DEFAULT_IO_CHANNELS - 1}"
+    return validate.integer(value, name, low=-1, high=DEFAULT_IO_CHANNELS - 1, where=where, allowed=allowed,
+                            whole=True)
+
+
+def _whole(low: int | None, high: int | None) -> Callable[[object, str, str], Number]:
+    def convert(value: object, name: str, where: str) -> Number:
+        return validate.integer(value, name, low=low, high=high, where=where, whole=True)
+    return convert
+
+
+def _sramp(value: object, name: str, where: str) -> Number:
+    return validate.in_range(validate.exact(value, name, where=where), name, low=0, high=SRAMP_MAX_MS, where=where,
+                             allowed=f"0..{SRAMP_MAX_MS} ms")
+
+
+def _rep_option(value: object, name: str, where: str) -> Number:
+    return validate.integer(value, name, low=0, high=3, where=where, whole=True,
+                            allowed="0..3 (bit 0: range 0..REP_DIST instead of -REP_DIST..REP_DIST)")
+
+
+#: Largest SRAMP [ms] (S-ramp time) [?: not re-read in a manual].
+SRAMP_MAX_MS = 250
+#: Position range of the repeat distance by default [units] [?].
+DEFAULT_REP_DIST = 200_000
+#: Software limits by default: beyond REP_DIST, so off [?].
+DEFAULT_FS_LIMIT = 200_000_000
+
+_P = ParamSpec
+#: Writable axis parameters. ``acts``: the model uses the value (it changes what the axis does or
+#: when); the others are checked, stored, readable back and listed as "set, not modelled".
 AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
-    ParamSpec("UNITS", 1, "> 0", _positive, "counts/unit", "step pulses per user unit"),
-    ParamSpec("SPEED", 1000, ">= 0", _not_negative, "units/s", "programmed path speed"),
-    ParamSpec("ACCEL", 1000, "> 0", _positive, "units/s^2", "acceleration"),
-    ParamSpec("DECEL", 1000, "> 0", _positive, "units/s^2", "deceleration"),
-    ParamSpec("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER}, {ATYPE_STEPPER_PWM}", _atype, "",
-              "axis type: 0 virtual, 1 stepper, 35 stepper output with PWM"),
-    ParamSpec("INVERT_STEP", 0, "ON/OFF", _flag, "", "invert the step output: its active edge becomes rising "
-              "(TRM 8-165)"),
-    ParamSpec("SERVO", 0, "ON/OFF", _flag, "", "servo on: step pulses feed MPOS and PWM_ENCODER"),
-    ParamSpec("FE_LIMIT", 2000, ">= 0", _not_negative, "units", "largest |DPOS - MPOS| before a motion error"),
-    ParamSpec("PWM_CYCLE", 0, _REGISTER, _register, "clocks", "PWM mark+space period [20 MHz clocks]",
-              pwm_only=True),
-    ParamSpec("PWM_MARK", 0, _REGISTER, _register, "clocks", "PWM on-time [20 MHz clocks]", pwm_only=True),
+    _P("UNITS", 1, "> 0", _positive, "counts/unit", "step pulses per user unit"),
+    _P("SPEED", 1000, ">= 0", _not_negative, "units/s", "programmed path speed"),
+    _P("ACCEL", 1000, "> 0", _positive, "units/s^2", "acceleration"),
+    _P("DECEL", 1000, "> 0", _positive, "units/s^2", "deceleration"),
+    _P("ATYPE", ATYPE_VIRTUAL, f"{ATYPE_VIRTUAL}, {ATYPE_STEPPER}, {ATYPE_STEPPER_PWM}", _atype, "",
+       "axis type: 0 virtual, 1 stepper, 35 stepper output with PWM"),
+    _P("INVERT_STEP", 0, "ON/OFF", _flag, "", "invert the step output: its active edge becomes rising (TRM 8-165)"),
+    _P("SERVO", 0, "ON/OFF", _flag, "", "servo on: step pulses feed MPOS and PWM_ENCODER; FE is checked"),
+    _P("FE_LIMIT", 2000, ">= 0", _not_negative, "units", "largest |DPOS - MPOS| before a motion error"),
+    _P("PWM_CYCLE", 0, _REGISTER, _register, "clocks", "PWM mark+space period [20 MHz clocks]", pwm_only=True),
+    _P("PWM_MARK", 0, _REGISTER, _register, "clocks", "PWM on-time [20 MHz clocks]", pwm_only=True),
+    # acting parameters beyond TN20-81
+    _P("CREEP", 200, ">= 0", _not_negative, "units/s", "speed of the slow phase of a DATUM sequence"),
+    _P("JOGSPEED", 200, ">= 0", _not_negative, "units/s", "jog speed (FWD_JOG / REV_JOG inputs)"),
+    _P("DATUM_IN", -1, "-1 or an input", _input_channel, "", "datum switch input (active low: at the switch "
+       "while OFF)"),
+    _P("FWD_IN", -1, "-1 or an input", _input_channel, "", "forward hardware limit input (active low)"),
+    _P("REV_IN", -1, "-1 or an input", _input_channel, "", "reverse hardware limit input (active low)"),
+    _P("FWD_JOG", -1, "-1 or an input", _input_channel, "", "forward jog input (active low)"),
+    _P("REV_JOG", -1, "-1 or an input", _input_channel, "", "reverse jog input (active low)"),
+    _P("FAST_JOG", -1, "-1 or an input", _input_channel, "", "jog at SPEED instead of JOGSPEED while active (low)"),
+    _P("FS_LIMIT", DEFAULT_FS_LIMIT, "a number", _number, "units", "forward software limit (on while below "
+       "REP_DIST)"),
+    _P("RS_LIMIT", -DEFAULT_FS_LIMIT, "a number", _number, "units", "reverse software limit (on while above "
+       "-REP_DIST)"),
+    _P("REP_DIST", DEFAULT_REP_DIST, "> 0", _positive, "units", "repeat distance: DPOS and MPOS wrap at it"),
+    _P("REP_OPTION", 0, "0..3", _rep_option, "", "bit 0: positions wrap in 0..REP_DIST"),
+    _P("MERGE", 0, "ON/OFF", _flag, "", "merge a buffered linear move into the running one (no stop between)"),
+    _P("SRAMP", 0, f"0..{SRAMP_MAX_MS}", _sramp, "ms", "S-ramp time: the acceleration ramps over it"),
+    # accepted, stored, not modelled (servo tuning, encoder set-up, windows...)
+    *(_P(name, default, "a number", _number, unit, doc, acts=False) for name, default, unit, doc in (
+        ("P_GAIN", 1, "", "proportional gain"), ("I_GAIN", 0, "", "integral gain"),
+        ("D_GAIN", 0, "", "derivative gain"),
+        ("OV_GAIN", 0, "", "output velocity gain"), ("VFF_GAIN", 0, "", "velocity feed forward gain"),
+        ("AFF_GAIN", 0, "", "acceleration feed forward gain"), ("DAC", 0, "", "DAC output when SERVO=OFF"),
+        ("DAC_SCALE", 16, "", "DAC scaling"), ("D_ZONE_MIN", 0, "", "dead zone low"),
+        ("D_ZONE_MAX", 0, "", "dead zone high"), ("OUTLIMIT", 1, "", "limit of the servo output"),
+        ("FASTDEC", 0, "units/s^2", "fast deceleration"), ("FHSPEED", 0, "units/s", "feedhold speed"),
+        ("CLOSE_WIN", 0, "units", "registration window end"), ("OPEN_WIN", 0, "units", "registration window start"),
+        ("FE_RANGE", 0, "units", "following error warning range"), ("CLUTCH_RATE", 0, "", "CONNECT ratio rate"),
+        ("BACKLASH_DIST", 0, "units", "backlash"), ("S_REF", 0, "", "speed reference (open loop)"),
+        ("T_REF", 0, "", "torque reference"), ("ENDMOVE", 0, "units", "end of the current move"),
+        ("ENCODER_RATIO", 1, "", "encoder scaling"), ("STEP_RATIO", 1, "", "step output scaling"))),
+    *(_P(name, default, allowed, conv, "", doc, acts=False) for name, default, allowed, conv, doc in (
+        ("FHOLD_IN", -1, "-1 or an input", _input_channel, "feedhold input"),
+        ("AXIS_ENABLE", 1, "ON/OFF", _flag, "axis enable"), ("VERIFY", 0, "ON/OFF", _flag, "step verification"),
+        ("FE_LIMIT_MODE", 0, "0..1", _whole(0, 1), "following error action"),
+        ("AXIS_DISPLAY", 0, "0..7", _whole(0, 7), "what the axis LEDs show"),
+        ("ENCODER_BITS", 0, "0..255", _whole(0, 255), "absolute encoder bits"),
+        ("ENCODER_CONTROL", 0, "0..255", _whole(0, 255), "absolute encoder mode"),
+        ("PP_STEP", 0, "-1024..1023", _whole(-1024, 1023), "pulses per step of a verifying stepper"),
+        ("ERRORMASK", 268, "0..65535", _whole(0, 65535), "AXISSTATUS bits that are motion errors"))),
 )}
 
 #: Axis parameters that can only be read (computed by the model).
@@ -158,6 +238,21 @@ READ_ONLY_AXIS_PARAMS: dict[str, str] = {
     "IDLE": "TRUE (-1) when the axis has no move running or buffered",
     "LOADED": "TRUE (-1) when no move waits in the axis' next-move buffer",
     "FE": "following error DPOS - MPOS [units]",
+    "AXISSTATUS": "status bits: 16 forward limit, 32 reverse limit, 64 datuming, 256 following error exceeded, "
+                  "512 forward software limit, 1024 reverse software limit, 2048 cancelling",
+    "AXIS_STATUS": "the same as AXISSTATUS (the later firmware's name)",
+    "MARK": "TRUE (-1) once a registration armed by REGIST has captured REG_POS",
+    "REG_POS": "position latched at the registration edge [units]",
+    "MTYPE": "type of the running move (0 idle, 1 MOVE, 2 MOVEABS, 4 MOVECIRC, 10 FORWARD, 11 REVERSE, "
+             "12 DATUM, 13 CAM, 14 FWD_JOG, 15 REV_JOG, 20 CAMBOX, 21 CONNECT, 22 MOVELINK)",
+    "NTYPE": "type of the buffered move (as MTYPE)",
+    "REMAIN": "distance to the end of the running move [units]",
+    "MSPEED": "measured speed over the last servo cycle [units/s]",
+    "DEMAND_EDGES": "demand position [counts]",
+    "LINKAX": "the link axis of the running linked move (-1: none)",
+    "MOVES_BUFFERED": "moves running or buffered on the axis",
+    "DRIVE_STATUS": "drive status register (0: no drive with digital communications)",
+    "ENCODER": "raw encoder count (the step count of a stepper)",
 }
 
 #: Controller-wide parameters.

@@ -125,3 +125,43 @@ class ArcPath:
         turn = s / self.radius
         cos, sin = cos_sin(self.start_angle + (-turn if self.clockwise else turn))
         return (self.centre[0] + self.radius * cos, self.centre[1] + self.radius * sin)
+
+
+@dataclass(frozen=True)
+class PolylinePath:
+    """Straight lines one after the other (merged moves, ``MERGE = ON``): ``segments`` of deltas [units].
+
+    Examples
+    --------
+    >>> p = PolylinePath(((Fraction(3), Fraction(4)), (Fraction(0), Fraction(10))))
+    >>> p.length, p.offset(Fraction(5)), p.offset(Fraction(10))
+    (Fraction(15, 1), (Fraction(3, 1), Fraction(4, 1)), (Fraction(3, 1), Fraction(9, 1)))
+    """
+
+    segments: tuple[tuple[Fraction, ...], ...]
+
+    @property
+    def lengths(self) -> tuple[Fraction, ...]:
+        return tuple(LinearPath(deltas).length for deltas in self.segments)
+
+    @property
+    def length(self) -> Fraction:
+        """Path length [units]: the sum of the segments'."""
+        return sum(self.lengths, Fraction(0))
+
+    @property
+    def deltas(self) -> tuple[Fraction, ...]:
+        """The displacement of the whole path."""
+        return tuple(sum(column, Fraction(0)) for column in zip(*self.segments, strict=True))
+
+    def offset(self, s: Fraction) -> tuple[Fraction, ...]:
+        """Displacement of each axis after ``s`` along the path [units]; the exact end at the full length."""
+        done = [Fraction(0)] * len(self.segments[0])
+        for deltas, length in zip(self.segments, self.lengths, strict=True):
+            if s >= length:
+                done = [a + d for a, d in zip(done, deltas, strict=True)]
+                s -= length
+                continue
+            part = LinearPath(deltas).offset(s)
+            return tuple(a + d for a, d in zip(done, part, strict=True))
+        return tuple(done)

@@ -71,7 +71,7 @@ class TrioProcess:
 
     def set(self, name: str, value: object, *, axis: object | None = None) -> None:
         """``NAME = value`` (``NAME AXIS(n) = value`` with ``axis``): write a parameter."""
-        self.controller.set_param(name, value, axis=self._axes(axis)[0])
+        self.controller.set_param(name, value, axis=self._axes(axis)[0], where=_where(self.origin))
 
     def get(self, name: str, *, axis: object | None = None) -> Fraction:
         """Read parameter ``NAME`` of the base axis (or ``axis``) now."""
@@ -115,9 +115,39 @@ class TrioProcess:
         """``REVERSE``: move the base axis (or ``axis``) in reverse at SPEED until ``CANCEL``."""
         return self.controller.forward(self._axes(axis)[0], reverse=True, origin=self.origin)
 
-    def cancel(self, *, axis: object | None = None) -> None:
-        """``CANCEL``: the running move of the base axis (or ``axis``) decelerates to rest at DECEL."""
-        self.controller.cancel(self._axes(axis)[:1])
+    def cancel(self, *, axis: object | None = None, buffered: bool = False) -> None:
+        """``CANCEL``: the running move of the base axis (or ``axis``) decelerates to rest at DECEL;
+        ``CANCEL(1)`` (``buffered``): its buffered move is dropped instead."""
+        self.controller.cancel(self._axes(axis)[:1], buffered=buffered)
+
+    def movemodify(self, position: object, *, axis: object | None = None) -> Event:
+        """``MOVEMODIFY(position)``: the running linear move of the base axis ends at ``position`` instead."""
+        return self.controller.movemodify(self._axes(axis)[0], position, origin=self.origin)
+
+    def datum(self, sequence: object, *, axis: object | None = None) -> Event:
+        """``DATUM(n)``: a homing sequence of the base axis (see :mod:`.datum`); DATUM(0) clears motion errors."""
+        event = self.controller.datum(self._axes(axis)[0], sequence, origin=self.origin)
+        return event if event is not None else self._done()
+
+    def connect(self, ratio: object, driving: object, *, axis: object | None = None) -> Event:
+        """``CONNECT(ratio, driving axis)``: the base axis follows the driving axis (see :mod:`.linked`)."""
+        return self.controller.connect(self._axes(axis)[0], ratio, driving, origin=self.origin)
+
+    def movelink(self, *values: object, axis: object | None = None) -> Event:
+        """``MOVELINK(distance, link dist, link acc, link dec, link axis[, option[, link pos]])``."""
+        return self.controller.movelink(self._axes(axis)[0], *values, origin=self.origin)
+
+    def cambox(self, *values: object, axis: object | None = None) -> Event:
+        """``CAMBOX(start, end, table multiplier, link distance, link axis[, option[, link pos]])``."""
+        return self.controller.cambox(self._axes(axis)[0], *values, origin=self.origin)
+
+    def cam(self, *values: object, axis: object | None = None) -> Event:
+        """``CAM(start, end, table multiplier, distance)``."""
+        return self.controller.cam(self._axes(axis)[0], *values, origin=self.origin)
+
+    def regist(self, mode: object, *extra: object, axis: object | None = None) -> None:
+        """``REGIST(mode)``: arm the registration of the base axis."""
+        self.controller.regist(self._axes(axis)[0], mode, *extra, origin=self.origin)
 
     def wait_idle(self, *, axis: object | None = None) -> Event:
         """``WAIT IDLE``: until every BASE axis has finished its moves."""
@@ -159,11 +189,11 @@ class TrioProcess:
         loaded = self.controller.pwm_control(self._axes(axis)[0], mode, *args)
         return loaded if loaded is not None else self._done()
 
-    def wa(self, ms: object) -> Event:
+    def wa(self, ms: object, *, priority: int = Priority.HOST) -> Event:
         """``WA(ms)``: wait ``ms`` milliseconds (a whole number of ticks); the program goes on at HOST priority,
         after a servo tick at that instant, like every program wake-up."""
         value = validate.positive(ms, "WA time", unit="ms", zero=True)
-        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"), Priority.HOST)
+        return self.sim.after(self.sim.timebase.ticks(value, "ms", name="WA time"), priority)
 
     def wait_until(self, condition: Any) -> Generator[Event, Any, None]:
         """``WAIT UNTIL cond``: check ``condition()`` now, then at every servo tick until it holds."""
@@ -171,3 +201,9 @@ class TrioProcess:
         while not condition():
             yield self.sim.at((self.sim.now // period + 1) * period, Priority.HOST)
 
+
+
+def _where(origin: str) -> str:
+    """``job.bas line 12`` as the notes write a place: ``job.bas:12``."""
+    name, _, line = origin.rpartition(" line ")
+    return f"{name}:{line}" if name else origin

@@ -27,6 +27,8 @@ from dataclasses import dataclass
 from fractions import Fraction
 from math import isqrt
 
+from cosim.controllers.trio.piecewise import Piecewise
+
 #: Fraction bits of a rounded square root (see :func:`sqrt_down`).
 SQRT_BITS = 64
 
@@ -99,6 +101,14 @@ class Trapezoid:
         """Duration of the move [s]."""
         return self.t_accel + self.t_const + self.t_decel
 
+    def pieces(self) -> Piecewise:
+        """The profile as polynomial pieces of ``t`` (see :mod:`.piecewise`): the same exact positions."""
+        a, v, d, ta, te = self.accel, self.peak, self.decel, self.t_accel, self.t_end
+        zero = Fraction(0)
+        return Piecewise(((zero, (zero, zero, a / 2)),
+                          (ta, (-v * ta / 2, v)),
+                          (ta + self.t_const, (self.length - d * te * te / 2, d * te, -d / 2))), te, self.length)
+
     def position(self, t: Fraction) -> Fraction:
         """Distance travelled along the path at ``t`` [s] after the start [units]."""
         if t <= 0:
@@ -143,6 +153,12 @@ class Ramp:
         """A continuous move has no end of its own (only CANCEL stops it)."""
         return None
 
+    def pieces(self) -> Piecewise:
+        """The ramp as polynomial pieces (endless)."""
+        zero = Fraction(0)
+        ta = self.peak / self.accel
+        return Piecewise(((zero, (zero, zero, self.accel / 2)), (ta, (-self.peak * ta / 2, self.peak))), None, zero)
+
     def position(self, t: Fraction) -> Fraction:
         """Distance travelled at ``t`` [s] after the start [units]."""
         if t <= 0:
@@ -185,6 +201,13 @@ class Stop:
         """Distance along the path where it stops [units]."""
         return self.start + self.start_speed * self.start_speed / (2 * self.decel)
 
+    def pieces(self) -> Piecewise:
+        """The stop as polynomial pieces: at ``start`` until ``t0``, then decelerating."""
+        zero = Fraction(0)
+        t0, v, d, s0 = self.t0, self.start_speed, self.decel, self.start
+        return Piecewise(((zero, (s0,)), (t0, (s0 - v * t0 - d * t0 * t0 / 2, v + d * t0, -d / 2))), self.t_end,
+                         self.length)
+
     def position(self, t: Fraction) -> Fraction:
         """Distance along the path at ``t`` [s after the move's start] [units]."""
         if t >= self.t_end:
@@ -197,3 +220,62 @@ class Stop:
         if t >= self.t_end:
             return Fraction(0)
         return self.start_speed - self.decel * max(t - self.t0, Fraction(0))
+
+
+
+# -- moves planned from a moving state ----------------------------------------------------------
+def plan_from(distance: Fraction, *, v0: Fraction, speed: Fraction, accel: Fraction, decel: Fraction,
+              v1: Fraction = Fraction(0)) -> Piecewise:
+    """A move over ``distance`` [units] from a state moving at ``v0`` >= 0 [units/s], ending at ``v1``.
+
+    For a re-planned move (``MOVEMODIFY``, a merged move): accelerate at ``accel`` (or decelerate
+    at ``decel`` when ``v0`` exceeds ``speed``) towards ``speed``, hold it, decelerate to ``v1`` so
+    as to end exactly at ``distance``. When the axis cannot stop before ``distance`` it stops at
+    ``decel`` beyond it and comes back with a rest-to-rest move. Time and distance from 0.
+
+    Examples
+    --------
+    >>> p = plan_from(Fraction(10), v0=Fraction(0), speed=Fraction(100), accel=Fraction(1000), decel=Fraction(1000))
+    >>> p.position(p.t_end), p.t_end == Trapezoid.plan(Fraction(10), speed=Fraction(100), accel=Fraction(1000),
+    ...                                                 decel=Fraction(1000)).t_end
+    (Fraction(10, 1), True)
+    >>> back = plan_from(Fraction(1), v0=Fraction(100), speed=Fraction(100), accel=Fraction(1000),
+    ...                  decel=Fraction(1000))
+    >>> back.position(Fraction(1, 10)), back.length        # stops at 5, comes back to 1
+    (Fraction(5, 1), Fraction(1, 1))
+    """
+    zero = Fraction(0)
+    stopping = v0 * v0 / (2 * decel)
+    if v1 == 0 and v0 == 0:
+        rest = Trapezoid.plan(abs(distance), speed=speed, accel=accel, decel=decel).pieces()
+        return rest if distance >= 0 else _backwards(rest)
+    if distance < stopping - v1 * v1 / (2 * decel) or distance < 0:  # cannot stop in time: stop, come back
+        stop = Stop(zero, zero, v0, decel)
+        back = Trapezoid.plan(stop.length - distance, speed=speed, accel=accel, decel=decel).pieces()
+        return stop.pieces().switched(stop.t_end, _backwards(back))
+    if v0 > speed:  # slow down to speed first
+        peak = speed
+        first = (v0 - peak) / decel
+        first_piece: tuple[Fraction, tuple[Fraction, ...]] = (zero, (zero, v0, -decel / 2))
+    else:
+        peak_sq = (2 * accel * decel * distance + decel * v0 * v0 + accel * v1 * v1) / (accel + decel)
+        peak = speed if peak_sq >= speed * speed else sqrt_down(peak_sq)
+        peak = max(peak, v0, v1)
+        first = (peak - v0) / accel
+        first_piece = (zero, (zero, v0, accel / 2))
+    d_first = (v0 + peak) * first / 2
+    last = (peak - v1) / decel
+    d_last = (peak + v1) * last / 2
+    cruise = (distance - d_first - d_last) / peak if peak else zero
+    t_c, t_d = first, first + cruise
+    t_end = t_d + last
+    pieces = [first_piece,
+              (t_c, (d_first - peak * t_c, peak)),
+              (t_d, (d_first + peak * cruise - peak * t_d - decel * t_d * t_d / 2, peak + decel * t_d, -decel / 2))]
+    pieces = [p for i, p in enumerate(pieces) if i + 1 == len(pieces) or pieces[i + 1][0] > p[0]]
+    return Piecewise(tuple(pieces), t_end, distance)  # with v1 > 0: the junction where the next move takes over
+
+
+def _backwards(profile: Piecewise) -> Piecewise:
+    return Piecewise(tuple((t, tuple(-c for c in poly)) for t, poly in profile.pieces), profile.t_end,
+                     -profile.length)

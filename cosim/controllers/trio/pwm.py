@@ -151,6 +151,19 @@ class PwmGenerator:
         self.link = link if mode == PwmMode.LINKED else None
         self._publish()
 
+    def servo_update_ratio(self, v_num: int, v_den: int) -> None:
+        """:meth:`servo_update` with ``vp_speed = v_num / v_den`` given as integers (the servo cycle's form)."""
+        link = self.link
+        if self.mode == PwmMode.LINKED and link is not None:
+            m, o = link.multiplier, link.offset
+            num = v_num * m.numerator * o.denominator + o.numerator * v_den * m.denominator * SPEED_LINK_DIVISOR
+            den = v_den * m.denominator * SPEED_LINK_DIVISOR * o.denominator
+            if den < 0:
+                num, den = -num, -den
+            mark = link.limit if num > link.limit * den else max(0, num // den)
+            if mark != self.mark or self.mark_out.value != (mark if self.on else 0):
+                self.set_mark(mark)
+
     def servo_update(self, vp_speed: Fraction) -> None:
         """Servo-cycle update of the speed link (``vp_speed`` of the link axis) [units/s]."""
         if self.mode == PwmMode.LINKED and self.link is not None:

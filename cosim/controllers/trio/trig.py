@@ -114,3 +114,56 @@ def _atan_reduced(t: Fraction) -> int:
     if t <= Fraction(1, 3):
         return sign * _atan_fixed(_fixed(t))
     return sign * (_pi_fixed() // 4 + _atan_fixed(_fixed((t - 1) / (t + 1))))
+
+
+def _atanh_fixed(x: int) -> int:
+    """atanh(x) for a fixed-point ``0 <= x <= ONE/3`` (odd series)."""
+    total, power, k, x2 = 0, x, 0, (x * x) >> WORK_BITS
+    while power:
+        total += power // (2 * k + 1)
+        power = (power * x2) >> WORK_BITS
+        k += 1
+    return total
+
+
+@cache
+def _ln2_fixed() -> int:
+    return 2 * _atanh_fixed(_ONE // 3)  # ln 2 = 2 atanh(1/3)
+
+
+def ln_down(value: Fraction) -> Fraction:
+    """The natural logarithm of ``value`` > 0, rounded down to ``2**-64``.
+
+    Examples
+    --------
+    >>> float(ln_down(Fraction(1))), round(float(ln_down(Fraction(10))), 12)
+    (0.0, 2.302585092994)
+    """
+    if value <= 0:
+        raise ValueError(f"ln of {value}")
+    k = value.numerator.bit_length() - value.denominator.bit_length()
+    m = value / Fraction(2) ** k  # 1/2 < m < 2
+    x = _fixed((m - 1) / (m + 1))  # |x| < 1/3
+    ln_m = 2 * (_atanh_fixed(x) if x >= 0 else -_atanh_fixed(-x))
+    return _result(k * _ln2_fixed() + ln_m)
+
+
+def exp_down(value: Fraction) -> Fraction:
+    """``e ** value``, rounded down to ``2**-64`` (``value`` below 64).
+
+    Examples
+    --------
+    >>> exp_down(Fraction(0)), round(float(exp_down(Fraction(1))), 12)
+    (Fraction(1, 1), 2.718281828459)
+    """
+    ln2 = _ln2_fixed()
+    fixed = _fixed(value)
+    k = fixed // ln2
+    r = fixed - k * ln2  # 0 <= r < ln 2
+    total, term, n = _ONE, _ONE, 0
+    while term:
+        n += 1
+        term = (term * r >> WORK_BITS) // n
+        total += term
+    scaled = total << k if k >= 0 else total >> -k
+    return _result(scaled)

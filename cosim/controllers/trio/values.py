@@ -71,7 +71,7 @@ def fit(value: Value, what: str = "value") -> Value:
 
 def integer_part(value: Value) -> int:
     """The integer part (towards zero) that logical operators act on."""
-    return value if type(value) is int else trunc(value)
+    return value if isinstance(value, int) else trunc(value)
 
 
 def literal(text: str) -> Value:
@@ -134,3 +134,101 @@ def to_text(value: Value) -> str:
     rounded = int(scaled + Fraction(1, 2))
     sign = "-" if value < 0 and rounded else ""
     return f"{sign}{rounded // 10_000}.{rounded % 10_000:04d}"
+
+
+# -- strings, types ---------------------------------------------------------------------------------
+#: Longest string a STRING variable holds by default [characters] [?: a model choice].
+DEFAULT_STRING_LENGTH = 255
+
+Datum = int | Fraction | str
+
+
+def is_text(value: object) -> bool:
+    """Is ``value`` a string (a STRING value) rather than a number?"""
+    return isinstance(value, str)
+
+
+def number(value: Datum, what: str = "value") -> Value:
+    """``value`` as a number; a string is an error naming ``what``."""
+    if isinstance(value, str):
+        raise ConfigurationError(f"{what} is the string {value!r} where a number is needed (use VAL)")
+    return value
+
+
+def text(value: Datum, what: str = "value") -> str:
+    """``value`` as a string; a number is an error naming ``what``."""
+    if not isinstance(value, str):
+        raise ConfigurationError(f"{what} is the number {to_text(value)} where a string is needed (use STR)")
+    return value
+
+
+def typed(value: Datum, kind: str, name: str, length: int = DEFAULT_STRING_LENGTH) -> Datum:
+    """``value`` stored in a variable declared ``DIM name AS kind``.
+
+    INTEGER keeps the integer part (towards zero), BOOLEAN is TRUE (-1) for any non-zero value and
+    FALSE (0) otherwise, FLOAT keeps the value, STRING keeps at most ``length`` characters.
+
+    Examples
+    --------
+    >>> typed(Fraction(-7, 2), "INTEGER", "n"), typed(5, "BOOLEAN", "b"), typed("abcdef", "STRING", "s", 3)
+    (-3, -1, 'abc')
+    """
+    if kind == "STRING":
+        return text(value, name)[:length]
+    value = number(value, name)
+    if kind == "INTEGER":
+        return integer_part(value)
+    if kind == "BOOLEAN":
+        return -1 if value else 0
+    return value
+
+
+def parse_number(chars: str) -> Value:
+    """The number at the start of ``chars`` as ``VAL`` and ``INPUT`` read it (0 when there is none).
+
+    Examples
+    --------
+    >>> parse_number(" 12.5xyz"), parse_number("-3"), parse_number("abc"), parse_number("$1F")
+    (Fraction(25, 2), -3, 0, 31)
+    """
+    stripped = chars.strip()
+    sign = 1
+    if stripped[:1] in "+-" and stripped[:1]:
+        sign, stripped = (-1 if stripped[0] == "-" else 1), stripped[1:].lstrip()
+    hex_match = re.match(r"\$[0-9a-fA-F]{1,8}", stripped)
+    if hex_match:
+        return fit(sign * int(hex_match.group()[1:], 16), "VAL")
+    match = re.match(r"([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][-+]?[0-9]{1,3})?", stripped)
+    if not match:
+        return 0
+    value = literal(match.group())
+    return fit(-value if sign < 0 else value, "VAL")
+
+
+def hex_text(value: Value) -> str:
+    """``HEX(value)``: the integer part in upper-case hexadecimal (two's complement for a negative one, 32 bits).
+
+    Examples
+    --------
+    >>> hex_text(255), hex_text(-1), hex_text(Fraction(33, 2))
+    ('FF', 'FFFFFFFF', '10')
+    """
+    n = integer_part(value)
+    return f"{n & 0xFFFFFFFF if n < 0 else n:X}"
+
+
+def formatted(value: Value, width: int, decimals: int) -> str:
+    """``PRINT value[width, decimals]``: right-aligned in ``width`` characters with ``decimals`` decimal places
+    (rounded half away from zero).
+
+    Examples
+    --------
+    >>> formatted(Fraction(314159, 100000), 8, 2), formatted(-2, 5, 0), formatted(12345, 3, 0)
+    ('    3.14', '   -2', '12345')
+    """
+    scale = 10**decimals
+    scaled = abs(Fraction(value)) * scale
+    rounded = int(scaled + Fraction(1, 2))
+    sign = "-" if value < 0 and rounded else ""
+    body = f"{rounded // scale}" + (f".{rounded % scale:0{decimals}d}" if decimals else "")
+    return f"{sign}{body}".rjust(width)
