@@ -37,9 +37,10 @@ header) read and fill it through its public methods only.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from fractions import Fraction
+from itertools import repeat
 from pathlib import Path
 from typing import Any, Literal, cast
 
@@ -228,6 +229,51 @@ class Trace:
                 spill()
 
         return record
+
+    def values_extender(self, name: str) -> Callable[[Sequence[int], Sequence[float]], None]:
+        """``extend(times, values)``: many records of one declared value signal at once, bound once.
+
+        The same rows as calling :meth:`recorder`'s ``record(t, value)`` for each pair in turn (and
+        the same spills: a batch that would cross the spill limit is appended row by row).
+        """
+        columns = self._values[name]
+        t_column, v_column = columns.arrays
+        record = self.recorder(name)
+        limit = columns.limit
+
+        def extend(times: Sequence[int], values: Sequence[float]) -> None:
+            if len(t_column) + len(times) < limit:
+                t_column.extend(times)
+                v_column.extend(values)
+            else:
+                for t, value in zip(times, values, strict=True):
+                    record(t, value)
+
+        return extend
+
+    def segment_run_recorder(self, name: str) -> Callable[[int, int, Sequence[int], int], None]:
+        """``record_run(t0, duration, counts, direction)``: contiguous segments of one pulse train at once.
+
+        Segment ``j`` covers ``[t0 + j duration, t0 + (j + 1) duration)`` with ``counts[j]`` pulses; the
+        same rows as :meth:`segment_recorder`'s ``record`` called for each segment in turn.
+        """
+        columns = self._pulses[name].segments
+        t0_column, duration_column, count_column, direction_column = columns.arrays
+        record = self.segment_recorder(name)
+        limit = columns.limit
+
+        def record_run(t0: int, duration: int, counts: Sequence[int], direction: int) -> None:
+            n = len(counts)
+            if len(t0_column) + n < limit:
+                t0_column.extend(range(t0, t0 + n * duration, duration))
+                duration_column.extend(repeat(duration, n))
+                count_column.extend(counts)
+                direction_column.extend(repeat(direction, n))
+            else:
+                for j, count in enumerate(counts):
+                    record(t0 + j * duration, duration, count, direction)
+
+        return record_run
 
     def record_pulse(self, name: str, t: int, direction: int) -> None:
         """Record one pulse at tick ``t`` (for trains that are not evenly spread)."""
