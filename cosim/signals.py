@@ -174,7 +174,7 @@ class PulseTrain:
         for listener in self._listeners:
             listener(self, t0, duration, count, direction)
 
-    def emit_run(self, t0: int, duration: int, counts: Sequence[int], direction: int, *, lead: int) -> None:
+    def emit_run(self, t0: int, duration: int, counts: Sequence[int], direction: int, lead: int) -> None:
         """Emit contiguous segments at once: segment ``j`` has ``counts[j]`` (> 0) pulses over
         ``[t0 + j duration, t0 + (j + 1) duration)`` in ``direction``, as if each had been emitted at
         ``t0 + j duration - lead`` (``t0 - lead`` is now).

@@ -61,6 +61,8 @@ from array import array
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from itertools import islice
+from operator import ne
 from typing import Any
 from weakref import WeakKeyDictionary
 
@@ -261,28 +263,32 @@ class StepperCoupling:
         if self._t_end == t0 and self._armed_end == t0:
             self.wakeups.withdraw(t0)  # the run goes on: no stop at t0
             self._armed_end = None
-        rows, capacity = self._rows, self._capacity
+        signed = counts if sign > 0 else [-c for c in counts]
         running = self._running
         previous = running[2] if running is not None and running[1] == duration else None
-        settings = 0
-        t = t0
-        for count in counts:
-            signed = sign * count
-            if signed != previous:
-                settings += 1  # another rate
-                previous = signed
-            rows.extend((t, duration, signed))
-            if len(rows) == capacity:
-                self._dirty = True
-                self._make_room(t - lead)
-            t += duration
+        self.settings += (signed[0] != previous) + sum(map(ne, signed, islice(signed, 1, None)))  # rate changes
+        n = len(signed)
+        rows, capacity = self._rows, self._capacity
         self._dirty = True
-        self.settings += settings
-        self._running = (t - duration, duration, previous)  # type: ignore[assignment]
-        self._t_end = t
+        if len(rows) + 3 * n < capacity:  # the rows do not fill up within the run
+            flat = [duration] * (3 * n)
+            flat[::3] = range(t0, t0 + n * duration, duration)
+            flat[2::3] = signed
+            rows.fromlist(flat)
+        else:
+            t = t0
+            for count in signed:
+                rows.extend((t, duration, count))
+                self._dirty = True
+                if len(rows) == capacity:
+                    self._make_room(t - lead)
+                t += duration
+        t_last = t0 + (n - 1) * duration
+        self._running = (t_last, duration, signed[-1])
+        self._t_end = t_end = t_last + duration
         if not self._ends:
-            self.wakeups.arm(t)
-            self._armed_end = t
+            self.wakeups.arm(t_end)
+            self._armed_end = t_end
 
     def on_end(self, _train: PulseTrain) -> None:
         """End listener (a train that announces ends): no segment continues the last one, so stop at its end."""
@@ -380,11 +386,14 @@ class StepperCoupling:
             self._write()
             self.writes += 1
             self._dirty = False
-        done = 0
-        while done < len(rows) and rows[done] + rows[done + 1] <= t:
-            done += 3
-        if done:
-            del rows[:done]  # placed in this step; the plant's value keeps them until the next write
+        n = len(rows) // 3
+        if n:  # the rows that end by t, from the first: placed in this step
+            table = np.frombuffer(rows, dtype=np.int64).reshape(n, 3)
+            later = np.flatnonzero(table[:, 0] + table[:, 1] > t)
+            done = 3 * (int(later[0]) if later.size else n)
+            del table, later  # release rows' buffer before it is shortened
+            if done:
+                del rows[:done]  # the plant's value keeps them until the next write
 
     def _make_room(self, t: int | None = None) -> None:
         """The rows are full: step the plant to now (or to ``t``, the announcement of a segment of a run),

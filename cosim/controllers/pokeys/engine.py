@@ -66,6 +66,8 @@ _BUFFER, _INTERNAL = EngineState.BUFFER, EngineState.INTERNAL
 _JOGGING, _HOMING = EngineState.JOGGING, EngineState.HOMING
 _RUNNING, _READY = AxisState.RUNNING, AxisState.READY
 
+_BYTES_ONLY = {bytes}
+
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
 
 
@@ -166,14 +168,14 @@ class PulseEngine:
         self._emitters = [train.emit for train in self.steps]
         self._pos_setters = [register.set for register in self.positions]
         self._entry_plans: dict[bytes, tuple[tuple[int, bool, int, int, int], ...]] = {}
+        self._accepted_entries: set[bytes] = set()  # entries (bytes of this engine's width) a fill has passed
         self._keys: dict[bytes, bytes] = {}  # entry -> direction bits and moving axes (see _run_slots)
         self._counts: dict[bytes, tuple[int, ...]] = {}  # entry -> pulses per axis
         self._masks: dict[bytes, int] = {}  # entry -> the axes with pulses (bit a: axis a)
         self._pulsing = 0  # the axes with pulses in the last slot (their trains' runs go on)
         self._last_key: bytes | None = None  # of the entry the last slot took (None: it took none)
         self._run_emitters = [train.emit_run for train in self.steps]
-        self._pos_extenders = [sim.trace.values_extender(r.name) for r in self.positions]
-        self._level_extender = sim.trace.values_extender(self.buffer_level.name)
+        self._register_extenders: dict[bytes, Callable[..., None]] = {}  # by run key: its registers at once
         sim.process(self.pulse_slot())
 
     # -- host commands ------------------------------------------------------------------------
@@ -218,6 +220,11 @@ class PulseEngine:
             holds the reserved x byte 0xFF (pulse engine v1), or does not fit 7 bits. Nothing of
             the command is queued, and the refusal is recorded (:attr:`refusals`).
         """
+        if (type(entries) is list and entries and set(map(type, entries)) == _BYTES_ONLY
+                and self._accepted_entries.issuperset(entries)):  # every entry passed a fill before: valid
+            accepted = self.buffer.fill(entries)
+            self.buffer_level.set(self.buffer.level)
+            return FillReply(accepted, self.status())
         n = len(self.axis_names)
         over, reserved, limit = self._over_limit, self.device.reserved_x_byte, self.device.max_pulses_per_slot
         checked: list[bytes] = []
@@ -236,6 +243,8 @@ class PulseEngine:
                 a = next(a for a, b in enumerate(raw) if over[b])
                 self._refuse(i, a, signed_count(raw[a]))
             checked.append(raw)
+        if len(self._accepted_entries) < 4096:  # (bounded: a job's distinct entries are few)
+            self._accepted_entries.update(checked)
         accepted = self.buffer.fill(checked)
         self.buffer_level.set(self.buffer.level)
         return FillReply(accepted, self.status())
@@ -371,29 +380,41 @@ class PulseEngine:
         buffer entries that go on as the last slot did (:meth:`_run_slots`), they are emitted
         together, one pulse-train run per axis (:meth:`~cosim.signals.PulseTrain.emit_run`).
         """
-        sim, env, t0, slot = self.sim, self.sim.env, self.t0, self.slot_ticks
+        sim, env, t0, slot, switches = self.sim, self.sim.env, self.t0, self.slot_ticks, self.switches
         k = 0
         while True:
             yield At(env, t0 + k * slot, Priority.SLOT)
-            self.run_slot(t0 + k * slot)
-            k += 1
+            t = t0 + k * slot
+            if self._runs_ok() and not (sample := switches.sample()).stop_candidate:
+                self._sample = sample
+                free = sim.free_until()  # this slot runs now whatever else is due at t (later priorities)
+                k += self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS) if free > t else 1) or (
+                    self.run_slot(t) or 1)
+            else:
+                self.run_slot(t)
+                k += 1
             while True:
                 t = t0 + k * slot
                 free = sim.free_until()
-                if free > t + slot and self._runs_ok():  # two slot starts or more before anything else
-                    done = self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS))  # type: ignore[call-overload]
+                if free <= t:
+                    break  # something else is due first: wait for the slot's event
+                if self._runs_ok():
+                    done = self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS))
                     if done:
                         k += done
                         continue
-                if not sim.skip_to(t):
-                    break
+                sim.skip_to(t)
                 self.run_slot(t)
                 k += 1
 
     def _runs_ok(self) -> bool:
         """Can slots go as runs now: buffer mode, going on from a slot that took data, listeners that take runs."""
-        return (self._state is _BUFFER and self._stretch_start is None and self._armed and self._last_key is not None
-                and not self._sample.stop_candidate and all(train.takes_runs for train in self.steps))
+        if self._state is not _BUFFER or self._stretch_start is not None or self._last_key is None:
+            return False
+        for train in self.steps:
+            if not train.takes_runs:
+                return False
+        return not self._sample.stop_candidate
 
     def _run_slots(self, t: int, most: int) -> int:
         """Run the slots starting at ``t``, ``t + slot``, ... (at most ``most``, nothing else due before the last)
@@ -402,41 +423,51 @@ class PulseEngine:
         Returns how many (0: none), the clock at the last one's start. The trace and the listeners see
         what :meth:`run_slot` at each slot start would have given them.
         """
-        queued = self.buffer.peek_all() if self.buffer.level < most else self.buffer.peek(most)
-        key, plans = self._last_key, self._entry_plans
+        key, keys, counts_of = self._last_key, self._keys, self._counts
         counts: list[tuple[int, ...]] = []
-        for entry in queued:
-            plan = plans.get(entry)
-            if plan is None:
-                plan = self._entry_plan(entry)
-            if self._keys[entry] != key:
+        for entry in self.buffer.peek(most):
+            entry_key = keys.get(entry)
+            if entry_key is None:
+                self._entry_plan(entry)
+                entry_key = keys[entry]
+            if entry_key != key:
                 break
-            counts.append(self._counts[entry])
+            counts.append(counts_of[entry])
         n = len(counts)
-        if n < 2:
+        if not n:
             return 0
-        self.sim.skip_to(t)  # the first slot's start (nothing is due before the last one's)
+        sim = self.sim
+        if t != sim.now:
+            sim.skip_to(t)  # the first slot's start (nothing is due before the last one's)
         self.buffer.drop(n)
         self.slot_index += n
         slot, setup = self.slot_ticks, self.dir_setup_ticks
         times = range(t, t + n * slot, slot)
-        pos, emitters = self._pos, self._run_emitters
+        pos, emitters, registers = self._pos, self._run_emitters, self.positions
+        names, columns = [], []
         for a, moving in enumerate(key):
             if moving & 1:
                 column = [c[a] for c in counts]
-                negative = moving >= DIRECTION_BIT
-                emitters[a](t + setup, slot, column, 0 if negative else 1, lead=setup)
-                if negative:
-                    column = [-c for c in column]
-                positions = list(accumulate(column, initial=pos[a]))
-                del positions[0]
-                pos[a] = positions[-1]
-                self._pos_extenders[a](times, positions)
-                self.positions[a].value = positions[-1]
+                p = pos[a]
+                if moving >= DIRECTION_BIT:
+                    emitters[a](t + setup, slot, column, 0, setup)
+                    positions = [p - x for x in accumulate(column)]
+                else:
+                    emitters[a](t + setup, slot, column, 1, setup)
+                    positions = [p + x for x in accumulate(column)]
+                pos[a] = registers[a].value = positions[-1]
+                names.append(a)
+                columns.append(positions)
         level = self.buffer.level
-        self._level_extender(times, range(level + n - 1, level - 1, -1))
+        columns.append(range(level + n - 1, level - 1, -1))
         self.buffer_level.value = level
-        self.sim.skip_to(times[-1], passes=n - 1)
+        extend = self._register_extenders.get(key)
+        if extend is None:  # the position counters of the moving axes and the buffer level, at the slot starts
+            extend = self._register_extenders[key] = self.sim.trace.values_extenders(
+                [*(registers[a].name for a in names), self.buffer_level.name])
+        extend(times, columns)
+        if n > 1:
+            sim.skip_to(times[-1], passes=n - 1)
         return n
 
     def run_slot(self, t: int) -> None:
