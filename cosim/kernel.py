@@ -204,8 +204,6 @@ class Simulation:
     """
 
     def __init__(self, *, timebase: TimeBase | None = None, seed: int = 0) -> None:
-        import numpy as np
-
         from cosim.validate import integer
 
         self.seed = integer(seed, "seed", low=0, high=2**63 - 1)
@@ -216,9 +214,18 @@ class Simulation:
         self._eid: Iterator[int] = self.env._eid
         self.trace = Trace(self.timebase)
         self.notes = Notes()  # what the run's result lists besides checks: see cosim.notes
-        self.rng = np.random.default_rng(seed)
+        self._rng: Any = None  # made on first use (numpy.random costs ~20 ms of start-up to import)
         self._closers: list[Callable[[], None]] = []
         self._stoppers: list[Callable[[int], None]] = []
+
+    @property
+    def rng(self) -> Any:
+        """The simulation's random generator, ``numpy.random.default_rng(seed)`` (made on first use)."""
+        if self._rng is None:
+            import numpy as np
+
+            self._rng = np.random.default_rng(self.seed)
+        return self._rng
 
     @property
     def now(self) -> int:
