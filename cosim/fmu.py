@@ -284,7 +284,7 @@ class Fmu:
         }
         try:
             if self.fmi_version == 2:
-                self._fmu = FMU2Slave(**common)
+                self._fmu = _Fmu2Slave(**common)
                 self._logger = fmi2CallbackLoggerTYPE(self._log_fmi2)
                 callbacks = fmi2CallbackFunctions()
                 callbacks.logger = self._logger
@@ -293,7 +293,7 @@ class Fmu:
                 self._callbacks = callbacks
                 self._fmu.instantiate(callbacks=callbacks, loggingOn=logging)
             else:
-                self._fmu = FMU3Slave(**common)
+                self._fmu = _Fmu3Slave(**common)
                 self._fmu.instantiate(loggingOn=logging, eventModeUsed=self.event_mode,
                                       earlyReturnAllowed=self.early_return, logMessage=self._log_fmi3)
         except Exception as exc:
@@ -944,6 +944,39 @@ class BlockSampler:
 
 def _put(values: list[Any], i: int, t: int, value: Any) -> None:
     values[i] = value
+
+
+#: The FMI functions fmpy's FMU classes load, with their ctypes argument and result types, by class: what
+#: fmpy's ``_loadFunctions`` works out with ``inspect`` for every instance (~75 signatures, several ms), once.
+_FUNCTION_TYPES: dict[type, list[tuple[str, list[str], list[Any], Any]]] = {}
+
+
+def _load_functions(fmu: Any, load: Callable[[], None]) -> None:
+    """fmpy's ``_loadFunctions`` for ``fmu``: run once per class (``load``), then repeated from its record."""
+    table = _FUNCTION_TYPES.get(type(fmu))
+    if table is None:
+        load()
+        functions = getattr(fmu, "_functions", None)
+        if isinstance(functions, dict):
+            _FUNCTION_TYPES[type(fmu)] = [(name, list(getattr(f, "argnames", [])), list(f.argtypes or []), f.restype)
+                                          for name, f in functions.items()]
+        return
+    for name, argnames, argtypes, restype in table:
+        c_fun = getattr(fmu.dll, name)
+        c_fun.argnames = argnames
+        c_fun.argtypes = argtypes
+        c_fun.restype = restype
+        fmu._functions[name] = c_fun
+
+
+class _Fmu2Slave(FMU2Slave):  # type: ignore[misc]
+    def _loadFunctions(self) -> None:
+        _load_functions(self, super()._loadFunctions)
+
+
+class _Fmu3Slave(FMU3Slave):  # type: ignore[misc]
+    def _loadFunctions(self) -> None:
+        _load_functions(self, super()._loadFunctions)
 
 
 class _EventModeRefused(Exception):
