@@ -284,7 +284,7 @@ class Fmu:
         }
         try:
             if self.fmi_version == 2:
-                self._fmu = _Fmu2Slave(**common)
+                self._fmu = FMU2SlaveOnce(**common)
                 self._logger = fmi2CallbackLoggerTYPE(self._log_fmi2)
                 callbacks = fmi2CallbackFunctions()
                 callbacks.logger = self._logger
@@ -293,7 +293,7 @@ class Fmu:
                 self._callbacks = callbacks
                 self._fmu.instantiate(callbacks=callbacks, loggingOn=logging)
             else:
-                self._fmu = _Fmu3Slave(**common)
+                self._fmu = FMU3SlaveOnce(**common)
                 self._fmu.instantiate(loggingOn=logging, eventModeUsed=self.event_mode,
                                       earlyReturnAllowed=self.early_return, logMessage=self._log_fmi3)
         except Exception as exc:
@@ -969,12 +969,13 @@ def _load_functions(fmu: Any, load: Callable[[], None]) -> None:
         fmu._functions[name] = c_fun
 
 
-class _Fmu2Slave(FMU2Slave):  # type: ignore[misc]
+# (fmpy tells the FMI version from the class name's start: FMU2..., FMU3...)
+class FMU2SlaveOnce(FMU2Slave):  # type: ignore[misc]
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 
 
-class _Fmu3Slave(FMU3Slave):  # type: ignore[misc]
+class FMU3SlaveOnce(FMU3Slave):  # type: ignore[misc]
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 
