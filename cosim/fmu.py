@@ -38,6 +38,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2LastSuccessfulTime, fmi2Terminated
 from fmpy.fmi3 import FMU3Slave
 
+from cosim import fmucache
 from cosim.errors import ConfigurationError, CosimError, FmuError, PlantTerminated
 from cosim.fmuvars import Value, Variable, accessors
 from cosim.timebase import TimeBase
@@ -68,7 +69,10 @@ def _read_description(path_text: str, mtime_ns: int, size: int, cosimulation: bo
     """:func:`read_description` of one version of a file (read once: the schema check costs ~10 ms)."""
     path = Path(path_text)
     try:
-        model = read_model_description(path_text, validate=validate)
+        if path.is_dir():  # an unzipped FMU
+            model = read_model_description(path_text, validate=validate)
+        else:  # read once, then from the per-user FMU cache
+            model = fmucache.description(path, validate, lambda: read_model_description(path_text, validate=validate))
     except Exception as exc:  # fmpy raises plain exceptions for broken XML and broken files
         traceback.clear_frames(exc.__traceback__)  # fmpy's frames hold the FMU's file open: close it now
         problems = getattr(exc, "problems", None)
@@ -224,13 +228,20 @@ class Fmu:
         self.terminated: str | None = None
         self._ended: CosimError | None = None  # why it cannot step any more: terminated or closed
         self._unzipdir: str | None = None
+        self._owns_unzipdir = False
         self._fmu: Any = None
         self.model = read_description(self.path, validate=validate)
         self.fmi_version = 3 if self.model.fmiVersion.startswith("3") else 2
         self._where = f"{instance_name} ({self.path.name})"
-        self._unzipdir = tempfile.mkdtemp(prefix="cosim-fmu-")
-        extract(str(self.path), unzipdir=self._unzipdir)
         cs = self.model.coSimulation
+        if self.path.is_dir():  # an unzipped FMU: a private copy, as fmpy makes it
+            self._unzipdir = tempfile.mkdtemp(prefix="cosim-fmu-")
+            self._owns_unzipdir = True
+            extract(str(self.path), unzipdir=self._unzipdir)
+        else:  # unzipped once into the per-user FMU cache (a private copy if it may be loaded only once)
+            folder, self._owns_unzipdir = fmucache.unzipped(self.path,
+                                                            shared=not cs.canBeInstantiatedOnlyOncePerProcess)
+            self._unzipdir = str(folder)
         self.early_return = self.fmi_version == 3 and bool(cs.mightReturnEarlyFromDoStep)
         self.event_mode = self.fmi_version == 3 and bool(cs.hasEventMode)
         self.variables: dict[str, Variable] = {}
@@ -273,7 +284,7 @@ class Fmu:
         }
         try:
             if self.fmi_version == 2:
-                self._fmu = FMU2Slave(**common)
+                self._fmu = FMU2SlaveOnce(**common)
                 self._logger = fmi2CallbackLoggerTYPE(self._log_fmi2)
                 callbacks = fmi2CallbackFunctions()
                 callbacks.logger = self._logger
@@ -282,7 +293,7 @@ class Fmu:
                 self._callbacks = callbacks
                 self._fmu.instantiate(callbacks=callbacks, loggingOn=logging)
             else:
-                self._fmu = FMU3Slave(**common)
+                self._fmu = FMU3SlaveOnce(**common)
                 self._fmu.instantiate(loggingOn=logging, eventModeUsed=self.event_mode,
                                       earlyReturnAllowed=self.early_return, logMessage=self._log_fmi3)
         except Exception as exc:
@@ -847,7 +858,8 @@ class Fmu:
 
     def _cleanup(self) -> None:
         if self._unzipdir:
-            shutil.rmtree(self._unzipdir, ignore_errors=True)
+            if self._owns_unzipdir:  # (a folder of the FMU cache stays for the next run)
+                shutil.rmtree(self._unzipdir, ignore_errors=True)
             self._unzipdir = None
 
     def __enter__(self) -> Fmu:
@@ -882,8 +894,10 @@ class BlockSampler:
         self.count = 0
         self.times = np.zeros(rows, dtype=np.int64)
         component = ctypes.c_void_p(fmu._fmu.component)
-        #: per row, the calls that read into it: (getter, its arguments with that row's address)
-        self._rows: list[list[tuple[Any, tuple[Any, ...]]]] = [[] for _ in range(rows)]
+        #: per row, the calls that read into it: (getter, its arguments with that row's address), made when
+        #: the row is first used (a short run takes a few samples: most rows are never made)
+        self._rows: list[list[tuple[Any, tuple[Any, ...]]] | None] = [None] * rows
+        self._groups: list[tuple[Any, tuple[Any, ...], Any, int, tuple[Any, ...]]] = []
         self._blocks: list[tuple[Any, list[Callable[[Any, Any], None]]]] = []
         for get, variables, sinks in groups:
             n = len(variables)
@@ -891,10 +905,15 @@ class BlockSampler:
             size = ctypes.c_size_t(n)
             vrs = (ctypes.c_uint32 * n)(*[v.vr for v in variables])
             tail: tuple[Any, ...] = () if fmu.fmi_version == 2 else (size,)
-            for i, calls in enumerate(self._rows):
-                calls.append((get, (component, vrs, size, ctypes.c_void_p(block[i].ctypes.data), *tail)))
+            self._groups.append((get, (component, vrs, size), block.ctypes.data, block.strides[0], tail))
             self._blocks.append((block, sinks))
         self._names = ", ".join(v.name for _, variables, _ in groups for v in variables)
+
+    def _row(self, i: int) -> list[tuple[Any, tuple[Any, ...]]]:
+        """The calls that read into row ``i`` (made once)."""
+        calls = self._rows[i] = [(get, (*head, ctypes.c_void_p(base + i * stride), *tail))
+                                 for get, head, base, stride, tail in self._groups]
+        return calls
 
     def take(self, t: int) -> None:
         """Read every variable now, as the sample at tick ``t``."""
@@ -902,7 +921,7 @@ class BlockSampler:
         if fmu._fmu is None:
             raise FmuError(f"{fmu._where} is closed (its simulation has ended)")
         i = self.count
-        for get, args in self._rows[i]:
+        for get, args in self._rows[i] or self._row(i):
             status = get(*args)
             if status > 1:
                 raise FmuError(f"{fmu._where} at t={fmu.t} ticks: reading {self._names} failed with status "
@@ -925,6 +944,40 @@ class BlockSampler:
 
 def _put(values: list[Any], i: int, t: int, value: Any) -> None:
     values[i] = value
+
+
+#: The FMI functions fmpy's FMU classes load, with their ctypes argument and result types, by class: what
+#: fmpy's ``_loadFunctions`` works out with ``inspect`` for every instance (~75 signatures, several ms), once.
+_FUNCTION_TYPES: dict[type, list[tuple[str, list[str], list[Any], Any]]] = {}
+
+
+def _load_functions(fmu: Any, load: Callable[[], None]) -> None:
+    """fmpy's ``_loadFunctions`` for ``fmu``: run once per class (``load``), then repeated from its record."""
+    table = _FUNCTION_TYPES.get(type(fmu))
+    if table is None:
+        load()
+        functions = getattr(fmu, "_functions", None)
+        if isinstance(functions, dict):
+            _FUNCTION_TYPES[type(fmu)] = [(name, list(getattr(f, "argnames", [])), list(f.argtypes or []), f.restype)
+                                          for name, f in functions.items()]
+        return
+    for name, argnames, argtypes, restype in table:
+        c_fun = getattr(fmu.dll, name)
+        c_fun.argnames = argnames
+        c_fun.argtypes = argtypes
+        c_fun.restype = restype
+        fmu._functions[name] = c_fun
+
+
+# (fmpy tells the FMI version from the class name's start: FMU2..., FMU3...)
+class FMU2SlaveOnce(FMU2Slave):  # type: ignore[misc]
+    def _loadFunctions(self) -> None:
+        _load_functions(self, super()._loadFunctions)
+
+
+class FMU3SlaveOnce(FMU3Slave):  # type: ignore[misc]
+    def _loadFunctions(self) -> None:
+        _load_functions(self, super()._loadFunctions)
 
 
 class _EventModeRefused(Exception):

@@ -22,7 +22,6 @@ Run ``python -m cosim.fmubuild`` (or ``cosim build-fmus``) to build what is miss
 
 from __future__ import annotations
 
-import argparse
 import contextlib
 import ctypes
 import os
@@ -35,9 +34,13 @@ import zipfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from cosim import __version__, fmudesc, validate
+from cosim import __version__, validate
 from cosim.errors import ConfigurationError
+
+if TYPE_CHECKING:
+    from cosim.fmudesc import ModelSpec
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 #: The source checkout cosim runs from (it has ``pyproject.toml`` and ``fmu_src/``), or None when installed.
@@ -108,7 +111,7 @@ def _inputs(model: str) -> list[Path]:
     folder = _model_dir(model)
     files = [p for p in folder.iterdir() if p.is_file()]
     files += [p for p in (SOURCE_DIR / "common").iterdir() if p.is_file()]
-    files += [Path(__file__), Path(fmudesc.__file__)]
+    files += [Path(__file__), PACKAGE_DIR / "fmudesc.py"]  # (fmudesc is imported where an FMU is built)
     return files
 
 
@@ -154,8 +157,10 @@ def platform_folder(fmi_version: int) -> str:
     return str(fmpy.platform_tuple if fmi_version == 3 else fmpy.platform)
 
 
-def stage(model: str, fmi_version: int, folder: Path) -> fmudesc.ModelSpec:
+def stage(model: str, fmi_version: int, folder: Path) -> ModelSpec:
     """Write the unzipped FMU of ``model`` (without binary) into ``folder``."""
+    from cosim import fmudesc
+
     spec = fmudesc.load_spec(_model_dir(model))
     sources = folder / "sources"
     sources.mkdir(parents=True)
@@ -317,6 +322,8 @@ def summary(outcomes: list[BuildOutcome]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    import argparse
+
     parser = argparse.ArgumentParser(
         prog="python -m cosim.fmubuild",
         description=f"Build the plant FMUs (FMI 2.0 and 3.0) from {SOURCE_DIR} into {MODELS_DIR}/fmi2 and fmi3. "

@@ -204,8 +204,6 @@ class Simulation:
     """
 
     def __init__(self, *, timebase: TimeBase | None = None, seed: int = 0) -> None:
-        import numpy as np
-
         from cosim.validate import integer
 
         self.seed = integer(seed, "seed", low=0, high=2**63 - 1)
@@ -216,9 +214,18 @@ class Simulation:
         self._eid: Iterator[int] = self.env._eid
         self.trace = Trace(self.timebase)
         self.notes = Notes()  # what the run's result lists besides checks: see cosim.notes
-        self.rng = np.random.default_rng(seed)
+        self._rng: Any = None  # made on first use (numpy.random costs ~20 ms of start-up to import)
         self._closers: list[Callable[[], None]] = []
         self._stoppers: list[Callable[[int], None]] = []
+
+    @property
+    def rng(self) -> Any:
+        """The simulation's random generator, ``numpy.random.default_rng(seed)`` (made on first use)."""
+        if self._rng is None:
+            import numpy as np
+
+            self._rng = np.random.default_rng(self.seed)
+        return self._rng
 
     @property
     def now(self) -> int:
@@ -294,7 +301,19 @@ class Simulation:
         """
         return self.env.peek() <= t
 
-    def skip_to(self, t: int) -> bool:
+    def free_until(self) -> float:
+        """The first tick at which something else may happen: the next queued event (``inf`` if none).
+
+        ``now`` while a look-ahead is registered (a plant could announce an event at any instant).
+        A process resumed by an event of its own may do, at once, what it would do at instants before
+        this tick, then move the clock with :meth:`skip_to` (see there).
+        """
+        env = self.env
+        if env.look_aheads:
+            return env._now
+        return env.peek()
+
+    def skip_to(self, t: int, *, passes: int = 1) -> bool:
         """Move the clock to tick ``t`` at once if nothing else can happen before it; else do nothing.
 
         For a process that runs at many instants in a row (a controller's slot loop): instead of
@@ -306,6 +325,9 @@ class Simulation:
         Call it only from a process resumed by an event of its own (an ``At`` that nothing else
         waits on): other callbacks of a shared event would run after the jump and see the later
         clock.
+
+        ``passes``: how many passes of work the jump stands for (a process that did the work of
+        several instants at once, up to ``t``), for progress reports.
 
         Returns
         -------
@@ -321,8 +343,9 @@ class Simulation:
         if queue and queue[0][0] <= t:  # due_by(t)
             return False
         env._now = int(t)  # SimPy has no public setter; nothing is due before t, so no event is skipped
-        env._skips += 1  # env.count_step(t), inline
-        if env._on_progress is not None and not (env._steps + env._skips) & 0xFFF:
+        before = env._steps + env._skips
+        env._skips += passes  # env.count_step(t), inline
+        if env._on_progress is not None and (before ^ (before + passes)) >> 12:  # crossed a multiple of 4096
             env._on_progress(int(t))
         return True
 

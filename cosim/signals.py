@@ -14,18 +14,21 @@ plant variables they end up on.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim import validate
+from cosim.errors import ConfigurationError
 
 if TYPE_CHECKING:
     from cosim.kernel import Simulation
 
 Listener = Callable[["Signal"], None]
 SegmentListener = Callable[["PulseTrain", int, int, int, int], None]
+RunListener = Callable[["PulseTrain", int, int, Sequence[int], int, int], None]
+EndListener = Callable[["PulseTrain"], None]
 
 
 class Signal:
@@ -112,19 +115,51 @@ class PulseTrain:
     Notes
     -----
     ``position`` counts emitted pulses, signed by direction (dir 1 = positive).
+
+    A controller that knows several slots ahead that nothing else can happen in between (a PoKeys
+    engine between host events) may hand them over as one *run* of contiguous segments
+    (:meth:`emit_run`), if every listener takes runs (:attr:`takes_runs`); the trace and the
+    listeners end up as after one :meth:`emit` per segment at its own instant.
     """
 
-    def __init__(self, sim: Simulation, name: str, *, pulse_width: int = 1, description: str = "") -> None:
+    def __init__(self, sim: Simulation, name: str, *, pulse_width: int = 1, description: str = "",
+                 announces_ends: bool = False) -> None:
         self.sim = sim
         self.name = name
         self.position = 0
         self._listeners: list[SegmentListener] = []
+        self._run_listeners: list[RunListener] = []
+        self._end_listeners: list[EndListener] = []
+        self.takes_runs = True
+        """True while every listener takes runs of segments (:meth:`emit_run` may be used)."""
+        self.announces_ends = announces_ends
+        """The controller calls :meth:`end_run` at or before the end of every segment that no segment
+        continues (the next one does not start where it ends), so a listener need not watch each
+        segment's end for a stop: a PoKeys engine does at the next slot start."""
         sim.trace.declare(name, "pulse", description=description, pulse_width=pulse_width)
         self._record_segment = sim.trace.segment_recorder(name)
+        self._record_run = sim.trace.segment_run_recorder(name)
 
-    def subscribe(self, listener: SegmentListener) -> None:
-        """Call ``listener(train, t0, duration, count, direction)`` for every segment."""
+    def subscribe(self, listener: SegmentListener, *, runs: RunListener | None = None,
+                  ends: EndListener | None = None) -> None:
+        """Call ``listener(train, t0, duration, count, direction)`` for every segment.
+
+        ``runs``, if given, takes a run of segments in one call instead (:meth:`emit_run`):
+        ``runs(train, t0, duration, counts, direction, lead)``, segment ``j`` being
+        ``[t0 + j duration, t0 + (j + 1) duration)`` with ``counts[j]`` pulses, which :meth:`emit`
+        would have announced at ``t0 + j duration - lead``. Nothing else happens in the simulation
+        before the last of those instants, so the listener may act for each segment as at its own
+        instant (e.g. step a plant to it); the clock reads the first. A listener without ``runs``
+        makes the train take single segments only (:attr:`takes_runs` false). ``ends``, if given, is
+        called as ``ends(train)`` by :meth:`end_run` (see :attr:`announces_ends`).
+        """
         self._listeners.append(listener)
+        if ends is not None:
+            self._end_listeners.append(ends)
+        if runs is None:
+            self.takes_runs = False
+        else:
+            self._run_listeners.append(runs)
 
     def emit(self, t0: int, duration: int, count: int, direction: int) -> None:
         """Emit ``count`` pulses spread over ``[t0, t0 + duration)`` in ``direction`` (1 or 0).
@@ -138,6 +173,29 @@ class PulseTrain:
         self.position += count if direction else -count
         for listener in self._listeners:
             listener(self, t0, duration, count, direction)
+
+    def emit_run(self, t0: int, duration: int, counts: Sequence[int], direction: int, lead: int) -> None:
+        """Emit contiguous segments at once: segment ``j`` has ``counts[j]`` (> 0) pulses over
+        ``[t0 + j duration, t0 + (j + 1) duration)`` in ``direction``, as if each had been emitted at
+        ``t0 + j duration - lead`` (``t0 - lead`` is now).
+
+        Only while :attr:`takes_runs` holds, and only when nothing else can happen in the simulation
+        before the last of those instants (no event due, no look-ahead): the caller's promise.
+        """
+        if not self.takes_runs:
+            raise ConfigurationError(f"{self.name}: a listener takes single segments only (emit_run needs "
+                                     "every listener to take runs)")
+        self._record_run(t0, duration, counts, direction)
+        total = sum(counts)
+        self.position += total if direction else -total
+        for listener in self._run_listeners:
+            listener(self, t0, duration, counts, direction, lead)
+
+    def end_run(self) -> None:
+        """No segment continues the last one emitted (a train that :attr:`announces_ends` calls this at
+        or before its end): tell the listeners that asked."""
+        for listener in self._end_listeners:
+            listener(self)
 
     def _check_segment(self, t0: object, duration: object, count: object, direction: object) -> None:
         validate.integer(t0, "segment start", unit="ticks", where=self.name)

@@ -37,7 +37,7 @@ header) read and fill it through its public methods only.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from fractions import Fraction
 from pathlib import Path
@@ -235,6 +235,71 @@ class Trace:
                 spill()
 
         return record
+
+    def values_extender(self, name: str) -> Callable[[Sequence[int], Sequence[float]], None]:
+        """``extend(times, values)``: many records of one declared value signal at once, bound once.
+
+        The same rows as calling :meth:`recorder`'s ``record(t, value)`` for each pair in turn (and
+        the same spills: a batch that would cross the spill limit is appended row by row).
+        """
+        columns = self._values[name]
+        t_column, v_column = columns.arrays
+        record = self.recorder(name)
+        limit = columns.limit
+
+        def extend(times: Sequence[int], values: Sequence[float]) -> None:
+            if len(t_column) + len(times) < limit:  # (array.fromlist: several times array.extend's speed)
+                t_column.fromlist(list(times))
+                v_column.fromlist(list(values))
+            else:
+                for t, value in zip(times, values, strict=True):
+                    record(t, value)
+
+        return extend
+
+    def values_extenders(self, names: Sequence[str]) -> Callable[[Sequence[int], Sequence[Sequence[float]]], None]:
+        """``extend(times, columns)``: :meth:`values_extender` of several signals recorded at the same
+        instants in one call (``columns[i]``: the values of ``names[i]``), bound once."""
+        extenders = [self.values_extender(name) for name in names]
+        tables = [self._values[name] for name in names]
+        arrays = [table.arrays for table in tables]
+        limit = min(table.limit for table in tables)
+
+        def extend(times: Sequence[int], columns: Sequence[Sequence[float]]) -> None:
+            n = len(times)
+            t_list = list(times)
+            for (t_column, v_column), values, each in zip(arrays, columns, extenders):
+                if len(t_column) + n < limit:  # (array.fromlist: several times array.extend's speed)
+                    t_column.fromlist(t_list)
+                    v_column.fromlist(list(values))
+                else:
+                    each(times, values)
+
+        return extend
+
+    def segment_run_recorder(self, name: str) -> Callable[[int, int, Sequence[int], int], None]:
+        """``record_run(t0, duration, counts, direction)``: contiguous segments of one pulse train at once.
+
+        Segment ``j`` covers ``[t0 + j duration, t0 + (j + 1) duration)`` with ``counts[j]`` pulses; the
+        same rows as :meth:`segment_recorder`'s ``record`` called for each segment in turn.
+        """
+        columns = self._pulses[name].segments
+        t0_column, duration_column, count_column, direction_column = columns.arrays
+        record = self.segment_recorder(name)
+        limit = columns.limit
+
+        def record_run(t0: int, duration: int, counts: Sequence[int], direction: int) -> None:
+            n = len(counts)
+            if len(t0_column) + n < limit:  # (array.fromlist: several times array.extend's speed)
+                t0_column.fromlist(list(range(t0, t0 + n * duration, duration)))
+                duration_column.fromlist([duration] * n)
+                count_column.fromlist(list(counts))
+                direction_column.fromlist([direction] * n)
+            else:
+                for j, count in enumerate(counts):
+                    record(t0 + j * duration, duration, count, direction)
+
+        return record_run
 
     def record_pulse(self, name: str, t: int, direction: int) -> None:
         """Record one pulse at tick ``t`` (for trains that are not evenly spread)."""

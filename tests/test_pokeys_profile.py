@@ -5,10 +5,13 @@ from __future__ import annotations
 from fractions import Fraction
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from cosim.controllers.pokeys.config import AxisConfig, uniform_axes
 from cosim.controllers.pokeys.planner import Dwell, Move, plan, to_entries
-from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits, fastest_stoppable, stop_distance
+from cosim.controllers.pokeys.profile import AxisMotion, SlotLimits, fastest_arriving, fastest_stoppable, stop_distance
+from cosim.controllers.pokeys.trajectory import arriving_distance
 from cosim.errors import ConfigurationError
 
 
@@ -91,3 +94,28 @@ def test_to_entries_keeps_the_direction_bit_on_zero_counts() -> None:
 def test_bad_moves_are_refused(make: object, message: str) -> None:
     with pytest.raises(ConfigurationError, match=message):
         make()  # type: ignore[operator]
+
+
+@given(u=st.integers(1, 5_000), decel=st.integers(1, 500), speed=st.integers(0, 5_000), extra=st.integers(0, 10**6))
+def test_from_the_arriving_distance_on_a_corner_does_not_brake_the_speed(u: int, decel: int, speed: int,
+                                                                          extra: int) -> None:
+    # the planner skips fastest_arriving where remaining >= arriving_distance(vmax, ...): exact both ways
+    threshold = arriving_distance(u, decel, speed)
+    assert fastest_arriving(threshold + extra, decel, speed) >= u
+    if threshold > 0:
+        assert fastest_arriving(threshold - 1, decel, speed) < u
+
+
+def test_arriving_distance_sums_the_slots_faster_than_the_corner() -> None:
+    assert arriving_distance(6, 1, 3) == 6 + 5 + 4
+    assert arriving_distance(10, 4, 0) == 10 + 6 + 2
+    assert arriving_distance(3, 1, 3) == 0
+
+
+def test_a_move_repeated_from_the_same_start_is_planned_as_the_first_time() -> None:
+    axes = uniform_axes(accel=1_000_000)
+    there, back = Move((700, -300, 50)), Move((0, 0, 0))
+    once = plan([there], axes)
+    again = plan([there, back, there], axes)
+    assert again[:len(once)] == again[-len(once):] == once
+    assert [sum(c[a] for c in again) for a in range(3)] == [700, -300, 50]

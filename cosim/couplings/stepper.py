@@ -61,6 +61,8 @@ from array import array
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
+from itertools import islice
+from operator import ne
 from typing import Any
 from weakref import WeakKeyDictionary
 
@@ -201,6 +203,8 @@ class StepperCoupling:
     _announced: dict[int, tuple[float, int, int]] = field(default_factory=dict, repr=False)  # t0 -> rate, length, n
     _running: Row | None = field(default=None, repr=False)  # the latest segment (t0, duration, signed pulses)
     _t_end: int | None = field(default=None, repr=False)  # end of the run of segments [ticks]
+    _armed_end: int | None = field(default=None, repr=False)  # the stop check armed (at _t_end), if any
+    _ends: bool = field(default=False, repr=False)  # the train announces the ends of its runs
     _rows: array = field(default_factory=lambda: array("q"), repr=False)  # segments not placed yet, flat
     _array: np.ndarray | None = field(default=None, repr=False)  # the plant's step_segments value
     _capacity: int = field(default=0, repr=False)  # its elements, 3 per row (0: the rate way)
@@ -217,8 +221,9 @@ class StepperCoupling:
             signed = -signed
         wakeups = self.wakeups
         continues = self._t_end == t0
-        if continues:
+        if continues and self._armed_end == t0:
             wakeups.withdraw(t0)  # the run goes on: no stop at t0
+            self._armed_end = None
         if self._capacity:  # the segments way (first: it runs for every segment)
             rows = self._rows
             rows.extend((t0, duration, signed))
@@ -230,7 +235,9 @@ class StepperCoupling:
                 self.settings += 1  # another rate (rate_hz works it out when asked)
             self._running = (t0, duration, signed)
             self._t_end = t_end = t0 + duration
-            wakeups.arm(t_end)
+            if not self._ends:
+                wakeups.arm(t_end)
+                self._armed_end = t_end
             return
         rate_hz = segment_rate_hz(self.sim.timebase, duration, count, 1 if signed > 0 else -1)
         if continues and rate_hz == self._rate and not self._announced:
@@ -243,8 +250,60 @@ class StepperCoupling:
             self.deferred += 1
             wakeups.arm(t0)
 
+    def on_run(self, _train: PulseTrain, t0: int, duration: int, counts: Sequence[int], direction: int,
+               lead: int) -> None:
+        """Run listener (segments way): :meth:`on_segment` for each segment of a run, as at its own instant.
+
+        Segment ``j`` covers ``[t0 + j duration, t0 + (j + 1) duration)`` with ``counts[j]`` (> 0) pulses,
+        announced at ``t0 + j duration - lead``; nothing else happens before the last announcement, so
+        where the rows fill up the plant is stepped to that segment's announcement, as it would have
+        been then. The run goes on from segment to segment: one stop check at its end.
+        """
+        sign = self.sign if direction else -self.sign
+        if self._t_end == t0 and self._armed_end == t0:
+            self.wakeups.withdraw(t0)  # the run goes on: no stop at t0
+            self._armed_end = None
+        signed = counts if sign > 0 else [-c for c in counts]
+        running = self._running
+        previous = running[2] if running is not None and running[1] == duration else None
+        self.settings += (signed[0] != previous) + sum(map(ne, signed, islice(signed, 1, None)))  # rate changes
+        n = len(signed)
+        rows, capacity = self._rows, self._capacity
+        self._dirty = True
+        if len(rows) + 3 * n < capacity:  # the rows do not fill up within the run
+            flat = [duration] * (3 * n)
+            flat[::3] = range(t0, t0 + n * duration, duration)
+            flat[2::3] = signed
+            rows.fromlist(flat)
+        else:
+            t = t0
+            for count in signed:
+                rows.extend((t, duration, count))
+                self._dirty = True
+                if len(rows) == capacity:
+                    self._make_room(t - lead)
+                t += duration
+        t_last = t0 + (n - 1) * duration
+        self._running = (t_last, duration, signed[-1])
+        self._t_end = t_end = t_last + duration
+        if not self._ends:
+            self.wakeups.arm(t_end)
+            self._armed_end = t_end
+
+    def on_end(self, _train: PulseTrain) -> None:
+        """End listener (a train that announces ends): no segment continues the last one, so stop at its end."""
+        t_end = self._t_end
+        if t_end is not None and self._armed_end != t_end:
+            if t_end < self.sim.now:
+                raise ConfigurationError(f"{_train.name}: the end of a run of segments at t={t_end} ticks was "
+                                         f"announced late (now {self.sim.now})")
+            self.wakeups.arm(t_end)
+            self._armed_end = t_end
+
     def update(self, t: int) -> None:
         """At ``t`` (a kernel event): start a deferred segment, or stop where the run of segments ends."""
+        if self._armed_end == t:
+            self._armed_end = None
         segment = self._announced.pop(t, None)
         if segment is not None:
             rate_hz, duration, signed = segment
@@ -299,8 +358,10 @@ class StepperCoupling:
 
     def _start(self, t0: int, duration: int, signed: int) -> None:
         self._running = (t0, duration, signed)
-        self._t_end = t0 + duration
-        self.wakeups.arm(self._t_end)
+        self._t_end = t_end = t0 + duration
+        if not self._ends:
+            self.wakeups.arm(t_end)
+            self._armed_end = t_end
 
     # -- the segments way -------------------------------------------------------------------------
     def before_step(self, t: int) -> None:
@@ -325,16 +386,23 @@ class StepperCoupling:
             self._write()
             self.writes += 1
             self._dirty = False
-        done = 0
-        while done < len(rows) and rows[done] + rows[done + 1] <= t:
-            done += 3
-        if done:
-            del rows[:done]  # placed in this step; the plant's value keeps them until the next write
+        n = len(rows) // 3
+        if n:  # the rows that end by t, from the first: placed in this step
+            table = np.frombuffer(rows, dtype=np.int64).reshape(n, 3)
+            later = np.flatnonzero(table[:, 0] + table[:, 1] > t)
+            done = 3 * (int(later[0]) if later.size else n)
+            del table, later  # release rows' buffer before it is shortened
+            if done:
+                del rows[:done]  # the plant's value keeps them until the next write
 
-    def _make_room(self) -> None:
-        """The rows are full: step the plant to now, which places (and forgets) every row that has ended."""
+    def _make_room(self, t: int | None = None) -> None:
+        """The rows are full: step the plant to now (or to ``t``, the announcement of a segment of a run),
+        which places (and forgets) every row that has ended."""
         assert isinstance(self.plant, Plant)
-        self.plant.advance()
+        if t is None:
+            self.plant.advance()
+        else:
+            self.plant.advance_ahead(t)
         if len(self._rows) == self._capacity:
             raise ConfigurationError(f"{self.plant.name}: more than {self._capacity // 3 - 1} pulse-train segments "
                                      "announced ahead of the simulation's time (the plant's step_segments rows)")
@@ -397,9 +465,14 @@ def couple_stepper(port: StepDirPort, plant: PlantLike, *,
         coupling._write = plant.ahead_writer(segments, coupling._array)
         plant.before_step(coupling.before_step)
     delay = port.active_delay
-    port.step.subscribe(coupling.on_segment if not delay else  # the drive counts at the active edge
-                        lambda train, t0, duration, count, direction:
-                        coupling.on_segment(train, t0 + delay, duration, count, direction))
+    coupling._ends = port.step.announces_ends
+    if delay:  # the drive counts at the active edge
+        port.step.subscribe(lambda train, t0, duration, count, direction:
+                            coupling.on_segment(train, t0 + delay, duration, count, direction),
+                            ends=coupling.on_end if coupling._ends else None)
+    else:  # runs of segments on the segments way (the rate way sets inputs at each segment's instant)
+        port.step.subscribe(coupling.on_segment, runs=coupling.on_run if coupling.way == "segments" else None,
+                            ends=coupling.on_end if coupling._ends else None)
     return coupling
 
 

@@ -23,6 +23,10 @@ from cosim.timebase import Priority
 class PerPulseTrain(PulseTrain):
     """A pulse train that schedules each pulse of a segment as its own event (:meth:`PulseTrain.pulse`)."""
 
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.takes_runs = False  # one segment at a time, each into single pulses
+
     def emit(self, t0: int, duration: int, count: int, direction: int) -> None:
         """``count`` single pulses at ``t0 + (k * duration) // count`` [ticks], one kernel event each."""
         for k in range(count):

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterable, Sequence
+from itertools import islice
 
 from cosim.controllers.pokeys.limits import AXIS_NAMES, BUFFER_SLOTS, COUNT_MASK, DIRECTION_BIT, ENTRY_BYTES
 from cosim.errors import ConfigurationError
@@ -149,3 +150,16 @@ class SlotBuffer:
     def peek_all(self) -> list[Entry]:
         """A copy of the queued entries, oldest first."""
         return list(self._slots)
+
+    def peek(self, count: int) -> list[Entry]:
+        """The oldest ``count`` queued entries (fewer if fewer are queued), oldest first."""
+        return list(islice(self._slots, count))
+
+    def drop(self, count: int) -> None:
+        """Take the oldest ``count`` entries (as ``count`` calls of :meth:`pop`; they must be queued)."""
+        if count > len(self._slots):
+            raise ConfigurationError.out_of_range("entries to take", count, f"0..{len(self._slots)} (queued)")
+        popleft = self._slots.popleft
+        for _ in range(count):
+            popleft()
+        self.taken += count

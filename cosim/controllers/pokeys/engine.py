@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
+from itertools import accumulate
 from numbers import Integral
 from typing import Any
 
@@ -64,6 +65,8 @@ from cosim.validate import integer
 _BUFFER, _INTERNAL = EngineState.BUFFER, EngineState.INTERNAL
 _JOGGING, _HOMING = EngineState.JOGGING, EngineState.HOMING
 _RUNNING, _READY = AxisState.RUNNING, AxisState.READY
+
+_BYTES_ONLY = {bytes}
 
 HOST_SETTABLE = (EngineState.STOPPED, EngineState.INTERNAL, EngineState.BUFFER, EngineState.JOGGING)
 
@@ -130,8 +133,9 @@ class PulseEngine:
         n = len(cfg.axes)
         self.axis_names = names = self.device.axis_names
         self.buffer = SlotBuffer(BUFFER_SLOTS)
+        # every slot start says which axes have pulses: the trains announce where their runs of segments end
         self.steps = [pulse_train(sim, f"{name}.{a}.step", pulse_width=self.pulse_width_ticks,
-                                  description=f"step output {a}") for a in names]
+                                  description=f"step output {a}", announces_ends=True) for a in names]
         self.dirs = [Signal(sim, f"{name}.{a}.dir", initial=int(cfg.axes[i].invert_direction),
                             description=f"direction output {a} (1 = activated)") for i, a in enumerate(names)]
         self.positions = [Register(sim, f"{name}.{a}.position", unit="pulses", description=f"position counter {a}")
@@ -164,6 +168,14 @@ class PulseEngine:
         self._emitters = [train.emit for train in self.steps]
         self._pos_setters = [register.set for register in self.positions]
         self._entry_plans: dict[bytes, tuple[tuple[int, bool, int, int, int], ...]] = {}
+        self._accepted_entries: set[bytes] = set()  # entries (bytes of this engine's width) a fill has passed
+        self._keys: dict[bytes, bytes] = {}  # entry -> direction bits and moving axes (see _run_slots)
+        self._counts: dict[bytes, tuple[int, ...]] = {}  # entry -> pulses per axis
+        self._masks: dict[bytes, int] = {}  # entry -> the axes with pulses (bit a: axis a)
+        self._pulsing = 0  # the axes with pulses in the last slot (their trains' runs go on)
+        self._last_key: bytes | None = None  # of the entry the last slot took (None: it took none)
+        self._run_emitters = [train.emit_run for train in self.steps]
+        self._register_extenders: dict[bytes, Callable[..., None]] = {}  # by run key: its registers at once
         sim.process(self.pulse_slot())
 
     # -- host commands ------------------------------------------------------------------------
@@ -208,6 +220,11 @@ class PulseEngine:
             holds the reserved x byte 0xFF (pulse engine v1), or does not fit 7 bits. Nothing of
             the command is queued, and the refusal is recorded (:attr:`refusals`).
         """
+        if (type(entries) is list and entries and set(map(type, entries)) == _BYTES_ONLY
+                and self._accepted_entries.issuperset(entries)):  # every entry passed a fill before: valid
+            accepted = self.buffer.fill(entries)
+            self.buffer_level.set(self.buffer.level)
+            return FillReply(accepted, self.status())
         n = len(self.axis_names)
         over, reserved, limit = self._over_limit, self.device.reserved_x_byte, self.device.max_pulses_per_slot
         checked: list[bytes] = []
@@ -226,6 +243,8 @@ class PulseEngine:
                 a = next(a for a, b in enumerate(raw) if over[b])
                 self._refuse(i, a, signed_count(raw[a]))
             checked.append(raw)
+        if len(self._accepted_entries) < 4096:  # (bounded: a job's distinct entries are few)
+            self._accepted_entries.update(checked)
         accepted = self.buffer.fill(checked)
         self.buffer_level.set(self.buffer.level)
         return FillReply(accepted, self.status())
@@ -357,20 +376,103 @@ class PulseEngine:
         """SimPy process: one pass of :meth:`run_slot` at every slot start.
 
         Slots in a row with nothing else due in between run without a kernel event each
-        (:meth:`~cosim.kernel.Simulation.skip_to`): same instants, same trace.
+        (:meth:`~cosim.kernel.Simulation.skip_to`): same instants, same trace. Where such slots take
+        buffer entries that go on as the last slot did (:meth:`_run_slots`), they are emitted
+        together, one pulse-train run per axis (:meth:`~cosim.signals.PulseTrain.emit_run`).
         """
-        sim, env, t0, slot = self.sim, self.sim.env, self.t0, self.slot_ticks
+        sim, env, t0, slot, switches = self.sim, self.sim.env, self.t0, self.slot_ticks, self.switches
         k = 0
         while True:
             yield At(env, t0 + k * slot, Priority.SLOT)
-            self.run_slot(t0 + k * slot)
-            k += 1
-            while sim.skip_to(t0 + k * slot):
-                self.run_slot(t0 + k * slot)
+            t = t0 + k * slot
+            if self._runs_ok() and not (sample := switches.sample()).stop_candidate:
+                self._sample = sample
+                free = sim.free_until()  # this slot runs now whatever else is due at t (later priorities)
+                k += self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS) if free > t else 1) or (
+                    self.run_slot(t) or 1)
+            else:
+                self.run_slot(t)
                 k += 1
+            while True:
+                t = t0 + k * slot
+                free = sim.free_until()
+                if free <= t:
+                    break  # something else is due first: wait for the slot's event
+                if self._runs_ok():
+                    done = self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS))
+                    if done:
+                        k += done
+                        continue
+                sim.skip_to(t)
+                self.run_slot(t)
+                k += 1
+
+    def _runs_ok(self) -> bool:
+        """Can slots go as runs now: buffer mode, going on from a slot that took data, listeners that take runs."""
+        if self._state is not _BUFFER or self._stretch_start is not None or self._last_key is None:
+            return False
+        for train in self.steps:
+            if not train.takes_runs:
+                return False
+        return not self._sample.stop_candidate
+
+    def _run_slots(self, t: int, most: int) -> int:
+        """Run the slots starting at ``t``, ``t + slot``, ... (at most ``most``, nothing else due before the last)
+        whose buffer entries go on as the last slot's did: the same direction bits, pulses on the same axes.
+
+        Returns how many (0: none), the clock at the last one's start. The trace and the listeners see
+        what :meth:`run_slot` at each slot start would have given them.
+        """
+        key, keys, counts_of = self._last_key, self._keys, self._counts
+        counts: list[tuple[int, ...]] = []
+        for entry in self.buffer.peek(most):
+            entry_key = keys.get(entry)
+            if entry_key is None:
+                self._entry_plan(entry)
+                entry_key = keys[entry]
+            if entry_key != key:
+                break
+            counts.append(counts_of[entry])
+        n = len(counts)
+        if not n:
+            return 0
+        sim = self.sim
+        if t != sim.now:
+            sim.skip_to(t)  # the first slot's start (nothing is due before the last one's)
+        self.buffer.drop(n)
+        self.slot_index += n
+        slot, setup = self.slot_ticks, self.dir_setup_ticks
+        times = range(t, t + n * slot, slot)
+        pos, emitters, registers = self._pos, self._run_emitters, self.positions
+        names, columns = [], []
+        for a, moving in enumerate(key):
+            if moving & 1:
+                column = [c[a] for c in counts]
+                p = pos[a]
+                if moving >= DIRECTION_BIT:
+                    emitters[a](t + setup, slot, column, 0, setup)
+                    positions = [p - x for x in accumulate(column)]
+                else:
+                    emitters[a](t + setup, slot, column, 1, setup)
+                    positions = [p + x for x in accumulate(column)]
+                pos[a] = registers[a].value = positions[-1]
+                names.append(a)
+                columns.append(positions)
+        level = self.buffer.level
+        columns.append(range(level + n - 1, level - 1, -1))
+        self.buffer_level.value = level
+        extend = self._register_extenders.get(key)
+        if extend is None:  # the position counters of the moving axes and the buffer level, at the slot starts
+            extend = self._register_extenders[key] = self.sim.trace.values_extenders(
+                [*(registers[a].name for a in names), self.buffer_level.name])
+        extend(times, columns)
+        if n > 1:
+            sim.skip_to(times[-1], passes=n - 1)
+        return n
 
     def run_slot(self, t: int) -> None:
         """Everything the engine does at the slot start ``t`` [ticks]."""
+        pulsed, self._pulsing = self._pulsing, 0
         self.slot_index += 1
         self._sample = sample = self.switches.sample()
         if sample.stop_candidate:
@@ -379,6 +481,7 @@ class PulseEngine:
         if state is _BUFFER or state is _INTERNAL:
             entry = self.buffer.pop()
             if entry is None:
+                self._last_key = None
                 if state is _BUFFER and self._armed:
                     if self._stretch_start is None:
                         self._stretch_start = t
@@ -390,6 +493,8 @@ class PulseEngine:
                         self._close_underrun(t)
                     self._armed = True
                 self._emit_entry(t, entry)
+                self._last_key = self._keys[entry]
+                self._pulsing = self._masks[entry]
             if state is _INTERNAL:
                 self._produce()
             self.buffer_level.set(self.buffer.level, t)
@@ -397,6 +502,11 @@ class PulseEngine:
             self._emit_counts(t, [m.step() for m in self._motions])
         elif state is _HOMING:
             self._homing_slot(t, sample)
+        ended = pulsed & ~self._pulsing
+        if ended:  # axes whose run of segments ends with the last slot: at the start of this one, dir_setup before
+            for a, train in enumerate(self.steps):
+                if ended >> a & 1:
+                    train.end_run()
 
     def _evaluate_switches(self, sample: SwitchSample) -> None:
         if self.switches.emergency_tripped(sample):
@@ -449,9 +559,16 @@ class PulseEngine:
             negative = byte >= DIRECTION_BIT
             count = byte & COUNT_MASK
             plan.append((a, negative, count, 0 if negative else 1, -count if negative else count))
-        if len(self._entry_plans) >= 4096:  # a job with many distinct entries: keep the table bounded
+        if len(self._entry_plans) >= 4096:  # a job with many distinct entries: keep the tables bounded
             self._entry_plans.clear()
+            self._keys.clear()
+            self._counts.clear()
+            self._masks.clear()
         self._entry_plans[entry] = kept = tuple(plan)
+        # what a run of slots must keep: the direction bits, and which axes have pulses (bit 0)
+        self._keys[entry] = bytes(b & DIRECTION_BIT | (1 if b & COUNT_MASK else 0) for b in entry)
+        self._counts[entry] = tuple(b & COUNT_MASK for b in entry)
+        self._masks[entry] = sum(1 << a for a, b in enumerate(entry) if b & COUNT_MASK)
         return kept
 
     def _emit_counts(self, t: int, counts: Sequence[int], *, track_states: bool = True) -> None:
@@ -466,6 +583,7 @@ class PulseEngine:
             self._dir_bit[a] = negative
             self.dirs[a].set(negative != self.config.axes[a].invert_direction)
         if count:
+            self._pulsing |= 1 << a
             self._emitters[a](t + self.dir_setup_ticks, self.slot_ticks, count, 0 if negative else 1)
             position = self._pos[a] = self._pos[a] + (-count if negative else count)
             self.positions[a].set(position, t)
@@ -551,6 +669,7 @@ class PulseEngine:
 
     def _set_state(self, state: EngineState) -> None:
         self._state = state
+        self._last_key = None  # a run of slots goes on only from a slot that took data in this state
         self.state_signal.set(int(state))
         if state != EngineState.BUFFER:
             self._armed, self._stretch_start, self._stretch_slots = False, None, 0

@@ -206,6 +206,10 @@ class _Builder:
         self.vlim = [min(v, Fraction(limit)) for v in per_slot]
         self.alim = [a.spu * positive(a.max_accel, "max_accel") / SLOTS_PER_S**2 for a in axes]
         # the same in integers for segment(): a move of d steps is d * unit_factor / unit_den units
+        # numerators and denominators read once (Fraction's are properties: a call each time)
+        self.vlim_nd = [(v.numerator, v.denominator) for v in self.vlim]
+        self.alim_nd = [(a.numerator, a.denominator) for a in self.alim]
+        self.wanted: dict[Fraction, tuple[Fraction, int, int]] = {}  # feed -> quanta per slot, as a fraction p / q
         self.unit_den = lcm(*(spu.numerator for spu in self.spu))
         self.unit_factor = [spu.denominator * (self.unit_den // spu.numerator) for spu in self.spu]
         self.override = in_range(settings.feed_override, "feed_override", low=0, low_open=True, high=10)
@@ -272,18 +276,22 @@ class _Builder:
         moving = [(a, abs(d)) for a, d in enumerate(deltas) if d]
         # the slowest axis' bound on the path speed, vlim[a] * length / d (the first such axis on a tie)
         best, best_n, best_d = -1, 0, 1
+        vlim, alim = self.vlim_nd, self.alim_nd
         for a, d in moving:
-            n, m = self.vlim[a].numerator * length, self.vlim[a].denominator * d
+            n, m = vlim[a][0] * length, vlim[a][1] * d
             if best < 0 or n * best_d < best_n * m:
                 best, best_n, best_d = a, n, m
-        axis_bound = (Fraction(best_n, best_d), best)
-        accel = max(1, min(self.alim[a].numerator * length // (self.alim[a].denominator * d) for a, d in moving))
+        accel = max(1, min(alim[a][0] * length // (alim[a][1] * d) for a, d in moving))
         vmax = best_n // best_d
         if feed is not None:
-            wanted = feed * self.override * QUANTA_PER_UNIT / SLOTS_PER_S
-            if wanted > axis_bound[0]:
-                self.note(line, wanted, axis_bound, length, deltas)
-            vmax = min(vmax, math.floor(wanted))
+            known = self.wanted.get(feed)
+            if known is None:
+                wanted = feed * self.override * QUANTA_PER_UNIT / SLOTS_PER_S
+                known = self.wanted[feed] = (wanted, wanted.numerator, wanted.denominator)
+            wanted, p, q = known
+            if p * best_d > best_n * q:  # wanted > best_n / best_d: the axes slow the feed
+                self.note(line, wanted, (Fraction(best_n, best_d), best), length, deltas)
+            vmax = min(vmax, p // q)
         vmax = max(1, vmax)
         direction = tuple(u / den for u in units)  # correctly rounded, as float(Fraction(u, den))
         norm = math.sqrt(sum(u * u for u in direction))

@@ -106,11 +106,16 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
     position = list(start) if start is not None else [0] * len(axes)
     out: list[Counts] = []
     shared: dict[Counts, Counts] = {}  # equal slots share one tuple: an hour's job is millions of slots
+    planned: dict[tuple[tuple[int, ...], Move], list[Counts]] = {}  # a move repeated from the same start: planned once
     for step in steps:
         if isinstance(step, Dwell):
             out.extend([(0,) * len(axes)] * step.slots)
         else:
-            out.extend(shared.setdefault(slot, slot) for slot in plan_move(position, step, axes))
+            key = (tuple(position), step)
+            slots = planned.get(key)
+            if slots is None:
+                slots = planned[key] = [shared.setdefault(slot, slot) for slot in plan_move(position, step, axes)]
+            out.extend(slots)
             position = list(step.target)
     return out
 

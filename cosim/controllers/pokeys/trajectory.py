@@ -98,9 +98,13 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
     # the current segment's numbers, read once per segment (the loop runs once per slot)
     length, vmax, accel, decel, w = seg.length, seg.vmax, seg.accel, seg.decel, corners[0]
     parts = _parts(seg)
+    cruise = arriving_distance(vmax, decel, w)  # from this far before the corner on, vmax is not braked
     while not (k == n - 1 and lam == length):
         remaining = length - lam - (1 if w > 0 else 0)
-        u = max(max(0, v - decel), min(v + accel, vmax, fastest_arriving(remaining, decel, w)))
+        if remaining >= cruise:  # fastest_arriving(remaining, decel, w) >= vmax: it does not bind
+            u = max(max(0, v - decel), min(v + accel, vmax))
+        else:
+            u = max(max(0, v - decel), min(v + accel, vmax, fastest_arriving(remaining, decel, w)))
         if u <= 0:
             raise RuntimeError(f"planner: no progress at segment {k} of {n} ({seg})")
         lam += u
@@ -117,6 +121,7 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
                 length = seg.length
             vmax, accel, decel, w = seg.vmax, seg.accel, seg.decel, corners[k]
             parts = _parts(seg)
+            cruise = arriving_distance(vmax, decel, w)
         if lam > length:
             raise RuntimeError(f"planner: passed the end of the chain by {lam - length} quanta")
         # each axis at start + trunc(delta * lam / length), truncated towards the segment's start
@@ -125,6 +130,24 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
         pos = now
         v = 0 if landed else u
     return out
+
+
+def arriving_distance(u: int, decel: int, speed: int) -> int:
+    """What the slots faster than ``speed`` cover decelerating ``decel`` per slot from ``u`` [quanta]:
+    the ``T`` that :func:`~cosim.controllers.pokeys.profile.fastest_arriving` inverts, so
+    ``fastest_arriving(remaining, decel, speed) >= u`` wherever ``remaining >= arriving_distance(u, decel, speed)``.
+
+    Examples
+    --------
+    >>> arriving_distance(6, 1, 3)   # 6, 5, 4 are faster than 3
+    15
+    >>> arriving_distance(3, 1, 3), arriving_distance(4, 2, 0)
+    (0, 6)
+    """
+    if u <= speed:
+        return 0
+    m = -(-(u - speed) // decel)  # slots faster than speed: u - j decel > speed for j < m
+    return m * u - decel * m * (m - 1) // 2
 
 
 def _parts(seg: Segment) -> list[tuple[int, int]]:
