@@ -220,6 +220,45 @@ def test_canned_cycles_with_retract_modes_and_repeats() -> None:
         run("G81 X1 Z-1 F10\nM2\n")
 
 
+def test_g87_back_boring_and_g88_manual_retract_as_rs274_runs_them() -> None:
+    """The reference: G87 and G88 are "accepted, but the behavior is undefined"; rs274 2.9 (G21 G0 Z5, S100 M3,
+    G87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5) prints: traverses (1 1 5) (1 1 1) (1.5 1.25 1), STOP_SPINDLE_TURNING,
+    ORIENT_SPINDLE(0, 0, 2), traverses (1.5 1.25 -1) (1 1 -1), START_SPINDLE_CLOCKWISE, feeds (1 1 -0.5) (1 1 -1),
+    STOP, ORIENT, traverses (1.5 1.25 -1) (1.5 1.25 1) (1 1 1), START_SPINDLE_CLOCKWISE; under G91 K is from the
+    bottom; G88 P1.5 feeds to the bottom, DWELL(1.5), STOP_SPINDLE_TURNING, PROGRAM_STOP,
+    START_SPINDLE_CLOCKWISE."""
+    names = ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STOP_SPINDLE_TURNING", "ORIENT_SPINDLE", "START_SPINDLE_CLOCKWISE",
+             "DWELL", "PROGRAM_STOP")
+    back = [(c[0], *c[1:4]) if c[0].startswith("STRAIGHT") else c
+            for c in calls("G21 G0 Z5\nS100 M3\nG87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5 F100\nM2\n", *names)]
+    assert back[2:] == [
+        ("STRAIGHT_TRAVERSE", 1, 1, 5), ("STRAIGHT_TRAVERSE", 1, 1, 1), ("STRAIGHT_TRAVERSE", 1.5, 1.25, 1),
+        ("STOP_SPINDLE_TURNING", 0), ("ORIENT_SPINDLE", 0, 0, 2), ("STRAIGHT_TRAVERSE", 1.5, 1.25, -1),
+        ("STRAIGHT_TRAVERSE", 1, 1, -1), ("START_SPINDLE_CLOCKWISE", 0), ("STRAIGHT_FEED", 1, 1, -0.5),
+        ("STRAIGHT_FEED", 1, 1, -1), ("STOP_SPINDLE_TURNING", 0), ("ORIENT_SPINDLE", 0, 0, 2),
+        ("STRAIGHT_TRAVERSE", 1.5, 1.25, -1), ("STRAIGHT_TRAVERSE", 1.5, 1.25, 1), ("STRAIGHT_TRAVERSE", 1, 1, 1),
+        ("START_SPINDLE_CLOCKWISE", 0), ("STOP_SPINDLE_TURNING", 0)]
+    incremental = ends("G21 G0 Z5\nS100 M3 G91\nG87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5 F100\nM2\n")
+    assert (1, 1, 4.5) in incremental  # rs274: STRAIGHT_FEED(1.0000, 1.0000, 4.5000, ...) (R 6, bottom 5)
+    manual = calls("G21 G0 Z5\nS100 M3\nG88 X1 Y1 Z-1 R1 P1.5 F100\nM2\n", *names)
+    assert manual[4:9] == [("STRAIGHT_FEED", 1, 1, -1, 0, 0, 0, 0, 0, 0), ("DWELL", 1.5), ("STOP_SPINDLE_TURNING", 0),
+                           ("PROGRAM_STOP",), ("START_SPINDLE_CLOCKWISE", 0)]
+    with pytest.raises(ConfigurationError, match=r"p.nc:2:1: K word missing with g87"):
+        run("S100 M3\nG87 X1 Y1 Z-1 R1 I1 J1 F100\nM2\n")
+
+
+@pytest.mark.parametrize(("spindle", "cycle", "message"), [
+    ("", "G86 X1 Y1 Z-1 R1 P1", "Spindle not turning in g86"), ("", "G84 X1 Y1 Z-1 R1", "Spindle not turning in G84"),
+    ("S100 M4", "G84 X1 Y1 Z-1 R1", "Spindle turning counterclockwise in G84"),
+    ("S100 M3", "G74 X1 Y1 Z-1 R1", "Spindle turning clockwise in G74"),
+    ("", "G87 X1 Y1 Z-1 R1 I1 J1 K0", "Spindle not turning in g87"),
+    ("", "G88 X1 Y1 Z-1 R1 P1", "Spindle not turning in g88")])
+def test_cycles_that_need_the_spindle_refuse_as_rs274(spindle: str, cycle: str, message: str) -> None:
+    """rs274 2.9's messages, spelling included."""
+    with pytest.raises(ConfigurationError, match=rf"p.nc:2:1: {message}"):
+        run(f"G21 {spindle}\n{cycle} F100\nM2\n")
+
+
 # -- 4. coordinates and tools ---------------------------------------------------------------------
 def test_work_offsets_g10_g92_g53_and_g28_as_rs274_prints_them() -> None:
     """rs274: at X-2, G92 X10 gives SET_G92_OFFSET(-12); G10 L2 P2 X5 Y6 then G55 X1 Y1 is 6, 7 in G54."""
