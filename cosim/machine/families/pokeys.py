@@ -7,13 +7,17 @@
     model = "56E"                 # 56E, 56U, 57E, 57CNC
     dir_setup = "5 us"            # direction set-up before the first pulse of a slot
     pulse_width = "5 us"
-    [controller.axis.x]           # x, y, z (the 57CNC: up to 8 axes)
+    [controller.axis.x]           # x, y, z (the 57CNC: x, y, z, a, b, c, u, v)
     max_speed_hz = 24000          # the engine's own limits (internal modes); default from the host's below
     accel = 400000                # pulses/s^2 (decel defaults to accel)
     limit_pos_enabled = true
     steps_per_unit = 400          # the host's motor tuning, for G-code programs
     max_velocity = 50             # units/s
     max_accel = 500               # units/s^2
+    [controller.axis.a]           # a 57CNC's a, b, c (degrees) and u, v (units): G-code axes when tuned
+    steps_per_unit = 100          # steps/degree
+    max_velocity = 90             # degrees/s
+    max_accel = 900               # degrees/s^2
 
     [host]
     link = "usb"                  # usb or ethernet
@@ -58,6 +62,7 @@ from cosim.controllers.pokeys.gcode import UNITS, HostSetup, Tool, canonical, re
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.job import JobWatch
 from cosim.controllers.pokeys.limits import AXIS_NAMES
+from cosim.controllers.pokeys.models import MODELS
 from cosim.controllers.pokeys.pathplan import MODES, HostAxis, PathSettings, PlannedJob, plan_toolpath
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.controllers.pokeys.states import EngineState
@@ -73,6 +78,9 @@ AXIS_KEYS = ("max_speed_hz", "accel", "decel", "limit_pos_enabled", "limit_neg_e
 HOST_AXIS_UNITS = {"steps_per_unit": "steps/unit", "max_velocity": "units/s", "max_accel": "units/s^2"}
 HOST_AXIS_KEYS = tuple(HOST_AXIS_UNITS)
 GCODE_AXES = ("x", "y", "z")
+"""The axes every G-code machine tunes; the model's other axes (a 57CNC's a, b, c, u, v) join when tuned."""
+GCODE_LETTERS = "ABCUVW"
+"""Axis words beyond X, Y, Z (LinuxCNC's)."""
 GCODE_KEYS = ("units", "feed_override", "path_mode", "path_tolerance", "arc_tolerance", "allow_unsupported",
               "subroutine_path", "tool_change_time", "tool_change_position", "pause_time", "optional_stop", "probe",
               "block_delete", "tool")
@@ -222,31 +230,52 @@ class PoKeysFamily:
                                     feed_override=host.number("feed_override", Fraction(1)), units=units)
         axes = []
         assert self.axes_table is not None
-        for name in GCODE_AXES:
+        names = controller.axis_names
+        extra = tuple(name for name in names[3:] if self.host_axes.get(name))
+        for name in (*GCODE_AXES, *extra):
             values = self.host_axes.get(name, {})
             missing = [key for key in HOST_AXIS_KEYS if key not in values]
             if missing:
+                needs = (f"on the {', '.join(GCODE_AXES)} axes" if name in GCODE_AXES else
+                         f"on a G-code axis {name} ({'degrees' if name in 'abc' else 'units'})")
                 raise ConfigurationError(f"{self.axes_table.file}: {self.axes_table.key(name)}.{missing[0]} is "
-                                         f"missing (a G-code program needs {', '.join(HOST_AXIS_KEYS)} on the "
-                                         f"{', '.join(GCODE_AXES)} axes)")
+                                         f"missing (a G-code program needs {', '.join(HOST_AXIS_KEYS)} {needs})")
             with self.axes_table.at(name):
                 axes.append(HostAxis(**values, name=name))
+        no_axis = {letter: _no_axis(letter, controller, self.axes_table) for letter in GCODE_LETTERS
+                   if letter.lower() not in extra}
         with host.at():
             setup = HostSetup(units=units, tool_change_time=_seconds(host, "tool_change_time"),
                               tool_change_position=_position(host), pause_time=_seconds(host, "pause_time"),
                               optional_stop=host.flag("optional_stop", False),
-                              arc_tolerance=host.number("arc_tolerance", Fraction(1, 100)))
+                              arc_tolerance=host.number("arc_tolerance", Fraction(1, 100)),
+                              axes="".join((*GCODE_AXES, *extra)))
             tools = _tools(host)
             search = [(base / str(p)).resolve() for p in _list(host, "subroutine_path")]
             probe = host.flag("probe", False)
             block_delete = host.flag("block_delete", False)
         with table.at("file"):
             program = canonical(read_file(path), units=units, tools=tools, search_path=search,
-                                allow_unsupported=allow, probe=probe, axes="xyz", block_delete=block_delete)
+                                allow_unsupported=allow, probe=probe, axes="".join((*GCODE_AXES, *extra)),
+                                no_axis=no_axis, block_delete=block_delete)
             path_ = toolpath(program, setup)
         job = plan_toolpath(path_, axes, settings=settings, n_axes=len(controller.axis_names),
                             max_pulses_per_slot=controller.device.max_pulses_per_slot)
         return job, path_.ending, list(path_.notes)
+
+
+def _no_axis(letter: str, controller: PulseEngine, axes: Table) -> str:
+    """Why a G-code axis word cannot run on this machine: the model has not got the axis, or the file does not
+    tune it."""
+    device = controller.device
+    name = letter.lower()
+    if name not in device.axis_names:
+        most = max(MODELS.values(), key=lambda m: m.axes)
+        hint = f"; a PoKeys{most.name} drives {', '.join(most.axis_names)}" if name in most.axis_names else ""
+        return (f"a PoKeys{device.name} has no {letter} axis (its pulse engine drives {device.axes} axes: "
+                f"{', '.join(device.axis_names)}{hint})")
+    return (f"the {letter} axis of this PoKeys{device.name} is not a G-code axis: give "
+            f"{', '.join(HOST_AXIS_KEYS)} in {axes.file}: [{axes.key(name)}]")
 
 
 def _seconds(host: Table, key: str) -> Fraction:

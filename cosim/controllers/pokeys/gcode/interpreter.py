@@ -14,7 +14,7 @@ motion (``G33``, ``G33.1``, ``G76``), probing without a probe input (``G38.n``) 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -56,6 +56,9 @@ class Interpreter:
         The machine has a probe input (G38.n runs as a feed move that does not touch).
     axes : str
         The axis letters the machine has (lower case); a word for another axis is refused.
+    no_axis : mapping of str to str
+        Why the machine has not got an axis, by its letter (``"A"``), for the refusal of its word
+        (default: "the machine has no A axis").
     block_delete : bool
         Lines starting with ``/`` are skipped.
     max_lines : int
@@ -65,13 +68,14 @@ class Interpreter:
     def __init__(self, *, machine_units: str = "mm", units: str | None = None, tools: Sequence[Tool] = (),
                  search_path: Sequence[str | Path] = (), allow_unsupported: bool = False, probe: bool = False,
                  axes: str = "xyzabc", block_delete: bool = False, max_lines: int = 5_000_000,
-                 max_calls: int = 5_000_000) -> None:
+                 max_calls: int = 5_000_000, no_axis: Mapping[str, str] | None = None) -> None:
         self.machine_units = machine_units
         self.tools = {t.number: t for t in tools}
         self.library = Library(search_path)
         self.allow_unsupported = allow_unsupported
         self.probe = probe
         self.axes = axes.upper()
+        self.no_axis = dict(no_axis or {})
         self.block_delete = block_delete
         self.max_lines = max_lines
         self.max_calls = max_calls
@@ -196,8 +200,9 @@ class Interpreter:
         check_uses(words, state.motion)
         for letter in words.values:
             if letter in "XYZABCUVW" and letter not in self.axes:
-                raise WordError(f"Bad character '{letter.lower()}' used: the machine has no {letter} axis (its "
-                                f"axes: {', '.join(self.axes)})", words.column(letter))
+                why = self.no_axis.get(letter, f"the machine has no {letter} axis (its axes: {', '.join(self.axes)})")
+                raise WordError(f"{letter} word: {why} (LinuxCNC: Bad character '{letter.lower()}' used)",
+                                words.column(letter))
         if line.comments:
             messages.comment(self, line.comments[-1])
         if not words.g and not words.m and not words.values:
