@@ -57,6 +57,7 @@ from cosim.controllers.pokeys.toolpath import (
     Point,
     Spindle,
     Toolpath,
+    Wait,
     feed_axes,
 )
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
@@ -201,6 +202,9 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
             builder.counts.extend([(0,) * n_axes] * slots)
         elif isinstance(step, PathControl):
             builder.path_control(step)
+        elif isinstance(step, Wait):
+            raise ConfigurationError(f"{toolpath.source}:{step.line}: a tool path that waits on {step.input} is "
+                                     "planned piece by piece, as it runs (cosim.controllers.pokeys.gcodejob)")
         else:
             builder.flush()
             builder.outputs.append((len(builder.counts), step))

@@ -94,7 +94,8 @@ class Output:
 
     Names: ``coolant_flood``, ``coolant_mist`` (M7, M8, M9), ``tool`` (the tool in the spindle,
     M6, M61), ``tool_changing`` (1 during a tool change), ``paused`` (1 during an M0/M1/M60
-    pause), ``dout<n>`` and ``aout<n>`` (M62-M65, M67, M68).
+    pause), ``waiting`` (1 while an M66 waits on an input), ``dout<n>`` and ``aout<n>`` (M62-M65,
+    M67, M68).
     """
 
     name: str
@@ -126,7 +127,28 @@ class Message:
     line: int
 
 
-Step = Line | Arc | Pause | Spindle | Output | PathControl | Message
+WAIT_MODES = ("immediate", "rise", "fall", "high", "low")
+"""M66's wait types by their L number (LinuxCNC's reference)."""
+
+
+@dataclass(frozen=True)
+class Wait:
+    """The program waits for an input of the machine: the moves before it end at rest, then the host waits.
+
+    ``input`` is the input's name on the engine (``din<n>``, ``ain<n>``: M66 P/E; ``cycle_start``:
+    the operator's resume of an M0/M1/M60 pause); ``mode`` M66's wait type (0 immediate: read once,
+    1 rise, 2 fall, 3 high, 4 low; :data:`WAIT_MODES`); ``timeout`` [s] (None: none); ``reads``: the
+    program goes on with the value read (M66's ``#5399``: the input, or -1 after the timeout).
+    """
+
+    input: str
+    mode: int
+    timeout: Fraction | None
+    line: int
+    reads: bool = True
+
+
+Step = Line | Arc | Pause | Spindle | Output | PathControl | Message | Wait
 
 
 @dataclass(frozen=True)

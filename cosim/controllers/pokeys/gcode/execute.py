@@ -169,7 +169,7 @@ def _motion(interp: Interpreter, w: Words, machine: bool) -> None:
 
 
 def _io(interp: Interpreter, w: Words, code: int) -> None:
-    p, e, q, l_ = w.get("P"), w.get("E"), w.get("Q"), w.get("L")
+    p, e, q = w.get("P"), w.get("E"), w.get("Q")
     if code in (62, 63, 64, 65):
         n = integer(p) if p is not None else None
         if n is None or n < 0:
@@ -183,18 +183,44 @@ def _io(interp: Interpreter, w: Words, code: int) -> None:
             raise WordError(f"M{code} needs E, the analog output number, and Q, its value", w.m_columns[5])
         interp.emit("SET_MOTION_OUTPUT_VALUE" if code == 67 else "SET_AUX_OUTPUT_VALUE", n, q)
     else:  # M66
-        if (p is None) == (e is None):
-            raise WordError("M66 needs one of P (digital input) or E (analog input)", w.m_columns[5])
-        mode = integer(l_) if l_ is not None else 0
-        if mode is None or not 0 <= mode <= 4:
-            raise WordError(f"M66 L{show(l_ or 0)}: the wait type is 0..4", w.m_columns[5])
-        if e is not None and mode != 0:
-            raise WordError("M66 with an analog input (E) only takes L0", w.m_columns[5])
-        timeout = q if q is not None else 0
-        if mode != 0 and timeout <= 0:
-            raise WordError("M66 with L1..L4 needs Q, a timeout > 0 s", w.m_columns[5])
-        interp.emit("WAIT", integer(p if p is not None else e), 1 if p is not None else 0, mode, timeout)
-        interp.params.numbered[5399] = -1 if mode else 0
+        _wait(interp, w)
+
+
+def _wait(interp: Interpreter, w: Words) -> None:
+    """M66 P- | E- L- Q-, with LinuxCNC's checks and messages (rs274 2.9's wording)."""
+    p, e, q, l_ = w.get("P"), w.get("E"), w.get("Q"), w.get("L")
+    column = w.m_columns[5]
+    if p is not None and e is not None:
+        raise WordError("Invalid to select both a digital and an analog input with M66", column)
+    number = p if p is not None else e
+    if number is None or number < 0:
+        raise WordError("Need to have either a valid P or a valid E word with M66", column)
+    index = integer(number)
+    if index is None:
+        raise WordError(f"M66 {'P' if p is not None else 'E'}{show(number)}: the input number is a whole number",
+                        column)
+    mode = integer(l_) if l_ is not None else 0
+    if mode is None or not 0 <= mode <= 4:
+        raise WordError(f"M66 L{show(l_ or 0)}: the wait type is 0 (immediate), 1 (rise), 2 (fall), 3 (high) or "
+                        "4 (low)", w.column("L"))
+    if e is not None and mode != 0:
+        raise WordError("Can't select analog input with wait type != immediate return", column)
+    timeout = q if q is not None and mode != 0 else 0
+    if mode != 0 and timeout <= 0:
+        raise WordError("Zero timeout with wait type != immediate return", column)
+    digital = p is not None
+    if interp.inputs is not None:
+        kind = "digital" if digital else "analog"
+        count = interp.inputs[kind]
+        if index >= count:
+            have = f"{kind} inputs 0..{count - 1}" if count else f"no {kind} inputs"
+            raise WordError(f"M66 {'P' if digital else 'E'}{index}: the machine has {have} (host.{kind}_inputs = "
+                            f"{count} in the machine file; a [[stimulus]] drives each)", column)
+    interp.emit("WAIT", index, 1 if digital else 0, mode, timeout)
+    if interp.inputs is not None:
+        interp.suspended = True  # #5399 is the input as read when the motion before has ended: run() returns
+    else:
+        interp.params.numbered[5399] = 0  # as rs274 without a machine: its inputs read 0
 
 
 def _tool_change(interp: Interpreter, w: Words, code: int) -> None:

@@ -13,7 +13,11 @@ machine drives. What the host does between moves becomes records the planner put
 * coolant, tool, pauses, digital and analog outputs: :class:`~cosim.controllers.pokeys.toolpath.Output`;
 * a tool change (``M6``): a rapid to the machine file's tool change position (if it gives one),
   ``tool_changing`` = 1 for ``tool_change_time``, the new ``tool``;
-* ``M0`` (and ``M1`` with ``optional_stop``, ``M60``): ``paused`` = 1 for ``pause_time``;
+* ``M0`` (and ``M1`` with ``optional_stop``, ``M60``): ``paused`` = 1 for ``pause_time``, or with
+  ``cycle_start`` until the operator's cycle start (a :class:`~cosim.controllers.pokeys.toolpath.Wait`
+  for a rise of the engine's ``cycle_start`` input);
+* ``M66`` with the machine's inputs (``inputs``): a :class:`~cosim.controllers.pokeys.toolpath.Wait`
+  on ``din<n>`` / ``ain<n>`` (``waiting`` = 1 while it waits, L1-L4);
 * path control (``G61``, ``G61.1``, ``G64 P``): :class:`~cosim.controllers.pokeys.toolpath.PathControl`;
 * ``G5``/``G5.1`` splines: chords within the arc tolerance.
 """
@@ -38,6 +42,7 @@ from cosim.controllers.pokeys.toolpath import (
     Spindle,
     Step,
     Toolpath,
+    Wait,
     feed_axes,
 )
 from cosim.errors import ConfigurationError
@@ -72,6 +77,11 @@ class HostSetup:
     axes : str
         The axes the host plans: ``"xyz"``, then the machine's other axes among a, b, c, u, v, w
         (``"xyzab"``); the tool path's points have these coordinates.
+    cycle_start : bool
+        A pause (M0, M60, M1 with ``optional_stop``) lasts until the operator's cycle start (a rise
+        of the ``cycle_start`` input) instead of ``pause_time``.
+    inputs : bool
+        M66 waits on the machine's inputs (a ``Wait``); without them it ends at once (noted).
     """
 
     units: str = "mm"
@@ -81,6 +91,8 @@ class HostSetup:
     optional_stop: bool = False
     arc_tolerance: Fraction = Fraction(1, 100)
     axes: str = "xyz"
+    cycle_start: bool = False
+    inputs: bool = False
 
     def __post_init__(self) -> None:
         extra = self.axes[3:]
@@ -113,6 +125,7 @@ class _Follower:
         self.extra = [(CANON_AXES.index(a), a in LINEAR) for a in setup.axes[3:]]
         self.position: Point = (Fraction(0),) * len(setup.axes)
         self.start = self.position
+        self.done = 0  # calls followed
         self.unplanned = [i for i in range(3, 9) if CANON_AXES[i] not in setup.axes]
         self.rest: tuple[Number, ...] = (0,) * len(self.unplanned)
 
@@ -150,17 +163,25 @@ class _Follower:
 
     # -- calls --------------------------------------------------------------------------------------
     def run(self) -> Toolpath:
-        for call in self.program.calls:
+        self.advance()
+        return Toolpath(tuple(self.steps), source=self.program.source, start=self.start,
+                        skipped=tuple(self.program.skipped), notes=tuple(self.notes), ending=self.program.end,
+                        axes=self.axes)
+
+    def advance(self) -> list[Step]:
+        """Follow the calls the program has gained since the last time; the steps they make."""
+        first = len(self.steps)
+        calls = self.program.calls
+        for call in calls[self.done:]:
             name, args = call.name, call.args
             if self.pending is not None and (name not in SPINDLE_CALLS or call.line != self.pending.line):
                 self._flush_spindle()
             handler = getattr(self, f"_{name.lower()}", None)
             if handler is not None:
                 handler(call.line, *args)
+        self.done = len(calls)
         self._flush_spindle()
-        return Toolpath(tuple(self.steps), source=self.program.source, start=self.start,
-                        skipped=tuple(self.program.skipped), notes=tuple(self.notes), ending=self.program.end,
-                        axes=self.axes)
+        return self.steps[first:]
 
     def _flush_spindle(self) -> None:
         if self.pending is not None:
@@ -329,7 +350,9 @@ class _Follower:
 
     def _program_stop(self, line: int) -> None:
         self._output("paused", 1, line)
-        if self.setup.pause_time:
+        if self.setup.cycle_start:
+            self.steps.append(Wait("cycle_start", 1, None, line, reads=False))
+        elif self.setup.pause_time:
             self.steps.append(Pause(self.setup.pause_time, line))
         self._output("paused", 0, line)
 
@@ -358,6 +381,14 @@ class _Follower:
     _set_aux_output_value = _set_motion_output_value
 
     def _wait(self, line: int, index: int, digital: int, mode: int, timeout: Number) -> None:
+        if self.setup.inputs:
+            if mode:
+                self._output("waiting", 1, line)
+            self.steps.append(Wait(f"{'din' if digital else 'ain'}{index}", mode, _exact(timeout) if mode else None,
+                                   line))
+            if mode:
+                self._output("waiting", 0, line)
+            return
         if mode:
             note = (f"{self.program.source}:{line}: M66 waits on {'digital' if digital else 'analog'} input {index}: "
                     "inputs are not modelled, the wait ends at once")
@@ -385,3 +416,9 @@ def _bezier(ctrl: list[tuple[float, float]], t: float) -> tuple[float, float]:
 def toolpath(program: CanonProgram, setup: HostSetup | None = None) -> Toolpath:
     """The tool path of a canonical program, in machine coordinates and ``setup.units``."""
     return _Follower(program, setup or HostSetup()).run()
+
+
+def follower(program: CanonProgram, setup: HostSetup) -> _Follower:
+    """A follower of a program that is still growing (a live interpreter's): :meth:`_Follower.advance` gives the
+    steps of the calls added since its last call; ``notes`` are its notes so far."""
+    return _Follower(program, setup)
