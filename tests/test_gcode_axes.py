@@ -22,6 +22,7 @@ from pathlib import Path
 import pytest
 
 from cosim.controllers.pokeys.gcode import HostSetup, canonical, read_program, read_text
+from cosim.controllers.pokeys.pathplan import HostAxis, plan_toolpath
 from cosim.controllers.pokeys.toolpath import Arc, Line, feed_axes
 from cosim.errors import ConfigurationError
 from cosim.machine import load_machine
@@ -133,6 +134,21 @@ def test_the_rotary_counters_end_on_the_programmed_angle(machine: Path) -> None:
     (machine.parent / "job.nc").write_text("G21 G91\nG0 A90\nG1 A-30 F3600\nG90 G0 A-45.5\nM2\n")
     result = run_scenario(load_machine(machine))
     assert result.verdict == "PASS" and len(result.checks) == 2, result.table()
+
+
+def test_a_corner_between_moves_fed_along_different_axes_is_an_exact_stop() -> None:
+    """G64 blends X+A into X (both fed along X) but stops between X+A and a pure rotary move (fed in degrees): the
+    second pair plans as long under G64 P1 as under G61.1."""
+    axes = [*(HostAxis(400, 50, 1000, name=a) for a in "xyz"), HostAxis(100, 360, 3600, name="a")]
+
+    def slots(text: str) -> int:
+        path = read_program(text, axes="xyza", host=HostSetup(axes="xyza"))
+        return len(plan_toolpath(path, axes, n_axes=8, max_pulses_per_slot=125).counts)
+
+    same_feed_axes = "G21\n{}\nG1 X10 A90 F600\nG1 X20 A135\nM2\n"
+    other_feed_axes = "G21\n{}\nG1 X10 A90 F600\nG1 A180 F3600\nM2\n"
+    assert slots(same_feed_axes.format("G64 P1")) < slots(same_feed_axes.format("G61.1"))
+    assert slots(other_feed_axes.format("G64 P1")) == slots(other_feed_axes.format("G61.1"))
 
 
 @pytest.mark.parametrize(("model", "program", "message"), [

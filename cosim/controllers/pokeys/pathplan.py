@@ -18,7 +18,8 @@ Rules, in order:
    ``max_accel``. A feed the machine cannot run is slowed and **said so** (:attr:`PlannedJob.notes`,
    one per program line with the feed it got and the axis that limits it).
 4. **Corners.** ``mode = "exact_stop"`` (default, LinuxCNC's ``G61.1``): every segment, arc chords
-   included, ends at rest. ``mode = "blend"``: corners are passed at the *junction-deviation
+   included, ends at rest; so does a segment whose feed axes differ from the next one's (XYZ, UVW,
+   ABC: their path speeds are in different units). ``mode = "blend"``: corners are passed at the *junction-deviation
    speed* (the rule of grbl and Marlin): the speed at which a circular arc tangent to both segments
    and passing ``tolerance`` from the corner could be taken at the acceleration limit,
    ``v^2 = a * tolerance * sin(theta/2) / (1 - sin(theta/2))`` with ``theta`` the angle between the
@@ -243,6 +244,7 @@ class _Builder:
         self.exact_path = False
         self.chain: list[tuple[Segment, tuple[float, ...]]] = []
         self.corner_modes: list[tuple[bool, bool, float]] = []
+        self.along: list[int] | None = None  # the feed axes of the last segment
         self.counts: list[Counts] = []
         self.notes: dict[int, str] = {}
         self.outputs: list[tuple[int, Spindle | Output | Message]] = []
@@ -325,7 +327,10 @@ class _Builder:
         start, end = self._engine_counts(self.steps), self._engine_counts(target)
         self.steps = target
         self.chain.append((Segment(start, end, length, vmax, accel, accel), tuple(u / norm for u in direction)))
-        self.corner_modes.append((self.blend, self.exact_path, self.deviation))
+        # path speeds along different feed axes (mm along XYZ, degrees along ABC) do not meet: a stop between them
+        same = self.along in (None, along)
+        self.along = along
+        self.corner_modes.append((self.blend and same, self.exact_path and same, self.deviation))
         self.n_segments += 1
 
     def _engine_counts(self, steps: list[int]) -> tuple[int, ...]:
