@@ -356,6 +356,19 @@ def test_overrides_waits_and_saved_states() -> None:
     assert [u[1] for u in units] == ["MM", "INCHES", "MM", "INCHES", "MM"]
 
 
+def test_m19_orients_the_spindle_as_rs274_prints_it() -> None:
+    """Reference: M19 R- (0-360 degrees) Q- (seconds to wait) P- (0 shortest, 1 clockwise, 2 counter-clockwise). rs274
+    2.9: M19 R45 Q1 P1 -> ORIENT_SPINDLE(0, 45.0000, 1), SPINDLE.0.WAIT_ORIENT_COMPLETE(1.0000); M19 P2 ->
+    ORIENT_SPINDLE(0, 0.0000, 2); a bare M19 prints nothing; R-10: "R value must be within 0..360 with M19"."""
+    assert calls("M19 R45 Q1 P1\nM19 P2\nM19\nM2\n", "ORIENT_SPINDLE", "WAIT_ORIENT_COMPLETE") == [
+        ("ORIENT_SPINDLE", 0, 45, 1), ("WAIT_ORIENT_COMPLETE", 0, 1), ("ORIENT_SPINDLE", 0, 0, 2)]
+    for line, message in [("M19 R-10", "R value must be within 0..360 with M19"),
+                          ("M19 P3", "P value must be 0,1,or 2 with M19"),
+                          ("M19 R10 Q0", "Q word with M19 requires a value > 0")]:
+        with pytest.raises(ConfigurationError, match=rf"p.nc:1:1: {message}"):
+            run(f"{line}\nM2\n")
+
+
 def test_program_end_resets_as_linuxcnc_and_stops_the_spindle_and_coolant() -> None:
     """rs274 for M8 / M2: ... STOP_SPINDLE_TURNING, FLOOD_OFF, PROGRAM_END; M30 adds PALLET_SHUTTLE."""
     names = [c.name for c in run("M8\nM30\n").calls]

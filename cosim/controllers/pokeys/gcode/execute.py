@@ -67,7 +67,7 @@ def block(interp: Interpreter, w: Words) -> None:
             s.spindle = 0
             interp.emit("STOP_SPINDLE_TURNING", 0)
         else:
-            interp.emit("ORIENT_SPINDLE", 0, w.get("R") or 0, int(w.get("Q") or 0))
+            _orient(interp, w)
     if 11 in m:
         _state_save(interp, m[11])
     if 8 in m:
@@ -221,6 +221,23 @@ def _wait(interp: Interpreter, w: Words) -> None:
         interp.suspended = True  # #5399 is the input as read when the motion before has ended: run() returns
     else:
         interp.params.numbered[5399] = 0  # as rs274 without a machine: its inputs read 0
+
+
+def _orient(interp: Interpreter, w: Words) -> None:
+    """M19 R- Q- P-: ORIENT_SPINDLE(0, R, P) when R or P is given, WAIT_ORIENT_COMPLETE(Q) when Q is (rs274 2.9)."""
+    r, p, q = w.get("R"), w.get("P"), w.get("Q")
+    column = w.m_columns[7]
+    if r is not None and not 0 <= r <= 360:
+        raise WordError("R value must be within 0..360 with M19", column)
+    if p is not None and p not in (0, 1, 2):
+        raise WordError("P value must be 0,1,or 2 with M19", column)
+    if r is not None or p is not None:
+        interp.emit("ORIENT_SPINDLE", 0, r if r is not None else 0, int(p or 0))
+        interp.note("M19 (orient spindle) is signalled; the spindle's angle is not modelled")
+    if q is not None:
+        if q <= 0:
+            raise WordError("Q word with M19 requires a value > 0", column)
+        interp.emit("WAIT_ORIENT_COMPLETE", 0, q)
 
 
 def _tool_change(interp: Interpreter, w: Words, code: int) -> None:
