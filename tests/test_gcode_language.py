@@ -169,6 +169,14 @@ def _endless() -> None:
         raise ConfigurationError(str(exc)) from None
 
 
+def test_an_if_needs_its_endif_only_when_the_program_gets_there() -> None:
+    """rs274 2.9 runs ``O1 if [1]`` / ``M2`` (no endif: the program ends in the branch) and refuses ``O1 if [0]`` /
+    ``M2`` (it looks for the endif)."""
+    assert run("O1 if [1]\nG0 X1\nM2\n").end == "M2"
+    with pytest.raises(ConfigurationError, match=r"p.nc:1:4: O-word `if` o1: no matching endif"):
+        run("O1 if [0]\nG0 X1\nM2\n")
+
+
 # -- 3. motion ----------------------------------------------------------------------------------
 def test_arcs_in_the_three_planes_with_helix_turns_and_absolute_centres() -> None:
     """rs274: G18 G2 X5 Z0 I1 K1 from (X3, Z0): ARC_FEED(0, 5, 1, 4, -1, 7) (first axis Z, second X, normal Y);
@@ -218,6 +226,8 @@ def test_canned_cycles_with_retract_modes_and_repeats() -> None:
     assert dwell == [("STRAIGHT_FEED", 1, 1, -2, 0, 0, 0, 0, 0, 0), ("DWELL", 0.5)]
     with pytest.raises(ConfigurationError, match=r"R clearance plane unspecified in canned cycle G81"):
         run("G81 X1 Z-1 F10\nM2\n")
+    with pytest.raises(ConfigurationError, match=r"p.nc:1:18: Cannot do zero repeats of cycle"):  # rs274's message
+        run("G81 X1 Y1 Z-1 R1 L0 F10\nM2\n")
 
 
 def test_g87_back_boring_and_g88_manual_retract_as_rs274_runs_them() -> None:
@@ -316,6 +326,9 @@ def test_g61_g61_1_and_g64_p_q_become_path_control_and_change_the_job_time() -> 
     assert calls("G64 P0.1 Q0.05\nG61\nG61.1\nM2\n", "SET_MOTION_CONTROL_MODE", "SET_NAIVECAM_TOLERANCE") == [
         ("SET_MOTION_CONTROL_MODE", "CONTINUOUS", 0.1), ("SET_NAIVECAM_TOLERANCE", 0.05),
         ("SET_MOTION_CONTROL_MODE", "EXACT_PATH", 0), ("SET_MOTION_CONTROL_MODE", "EXACT_STOP", 0)]
+    # rs274: a negative P or Q is as none: G64 P-1 Q-2 prints CONTINUOUS, 0.000000 and NAIVECAM 0.0000
+    assert calls("G64 P-1 Q-2\nM2\n", "SET_MOTION_CONTROL_MODE", "SET_NAIVECAM_TOLERANCE") == [
+        ("SET_MOTION_CONTROL_MODE", "CONTINUOUS", 0), ("SET_NAIVECAM_TOLERANCE", 0)]
     square = "G1 X20 F3000\nY20\nX0\nY0\n" * 3 + "M2\n"
     axes = [HostAxis(400, 50, 500, name=a) for a in "xyz"]
 

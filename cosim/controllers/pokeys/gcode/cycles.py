@@ -68,6 +68,8 @@ def cycle(interp: Interpreter, w: Words, code: int) -> None:
         n = integer(w.values["L"])
         if n is None or n < 0:
             raise WordError(f"{name} L{show(w.values['L'])}: L (repeats) must be a whole number >= 0", w.column("L"))
+        if n == 0:
+            raise WordError("Cannot do zero repeats of cycle", w.column("L"))
         repeats = n
     if code in (730, 830):
         q = values.get("Q")

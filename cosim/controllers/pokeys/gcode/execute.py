@@ -320,8 +320,8 @@ def _path_control(interp: Interpreter, w: Words, code: int) -> None:
     else:
         p = w.get("P")
         q = w.get("Q")
-        if p is not None and p < 0:
-            raise WordError(f"G64 P{show(p)}: the blending tolerance is >= 0", w.column("P"))
+        p = p if p is not None and p >= 0 else None  # rs274: a negative P or Q is as none (CONTINUOUS, 0)
+        q = q if q is not None and q >= 0 else None
         s.path_p = p if p is not None else 0
         s.path_q = q if q is not None else s.path_p
         interp.emit("SET_MOTION_CONTROL_MODE", "CONTINUOUS", s.path_p)
