@@ -157,6 +157,14 @@ def test_a_pause_nobody_resumes_leaves_the_job_running_and_says_why(tmp_path: Pa
                for n in result["notes"])
 
 
+def test_an_m66_on_the_line_that_ends_the_program_reads_and_the_job_ends(tmp_path: Path) -> None:
+    """M2 runs after M66 on its line (RS274/NGC's order of execution): the wait ends the job's motion, then the end."""
+    result, _, out = run(tmp_path, "G21 G90\nG1 X10 F600\nM66 P0 L3 Q1 M2\nG1 X20\n")
+    assert result["verdict"] == "PASS"
+    assert edges(out, "pokeys.waiting")[1:] == [(1013 * MS, 1), ((2013 + 64) * MS, 0)]
+    assert edges(out, "pokeys.x.position")[-1][1] == 4000  # X10: the line after M2 never runs
+
+
 def test_a_program_error_after_a_wait_stops_the_job_with_its_place(tmp_path: Path) -> None:
     result, console, _ = run(tmp_path, "G21 G90\nG1 X10 F600\nM66 P0 L0\nG2 X0 Y0 I-1 J0\nM2\n")
     assert result["verdict"] == "FAIL"

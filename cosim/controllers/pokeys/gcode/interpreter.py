@@ -202,6 +202,7 @@ class Interpreter:
                 if self.suspended:
                     return self.program
         except Stop:
+            self.suspended = False  # M2 on the M66's line: the program has ended, nothing waits for the value
             return self.program
 
     # -- O-words -----------------------------------------------------------------------------------
