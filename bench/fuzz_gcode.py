@@ -9,7 +9,9 @@ one of the project's own errors (:class:`cosim.errors.CosimError`); the first on
 ``--crashes`` with their traceback. An input that takes more than ``SLOW_S`` of wall time is counted as
 slow and written there too.
 
-Run (``--workers`` processes, each with its own seed, ``--inputs`` in all or for ``--minutes``)::
+Run (``--workers`` processes, each with its own seed, ``--inputs`` in all or for ``--minutes``; ``--live``:
+as a machine file runs the program, the interpreter stopping at each M66 and going on with a value, the host
+following it with waits, cycle start and an A axis)::
 
     .venv/bin/python bench/fuzz_gcode.py --inputs 1000000 --workers 2
 """
@@ -32,7 +34,8 @@ from gcode_fuzz_programs import draw, exercise, seeds
 SLOW_S = 5.0
 
 
-def worker(seed: int, seconds: float, crash_dir: str, limit: int) -> tuple[int, int, int, float, int]:
+def worker(seed: int, seconds: float, crash_dir: str, limit: int, live: bool = False
+           ) -> tuple[int, int, int, float, int]:
     """Fuzz for ``seconds`` or ``limit`` inputs; returns (inputs, run to a tool path, crashes, slowest [s], slow)."""
     rng = random.Random(seed)
     texts = seeds()
@@ -43,7 +46,7 @@ def worker(seed: int, seconds: float, crash_dir: str, limit: int) -> tuple[int, 
         text = draw(rng, texts)
         started = time.monotonic()
         try:
-            parsed += exercise(text)
+            parsed += exercise(text, live=live)
         except Exception:
             crashes += 1
             if crashes <= 20:
@@ -68,12 +71,14 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--crashes", default="fuzz_crashes")
+    parser.add_argument("--live", action="store_true", help="run each input live (M66 stops, waits, an A axis)")
     args = parser.parse_args()
     seconds = args.minutes * 60
     started = time.monotonic()
     with multiprocessing.Pool(args.workers) as pool:
         share = -(-args.inputs // args.workers)
-        results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes, share) for k in range(args.workers)])
+        results = pool.starmap(worker, [(args.seed + k, seconds, args.crashes, share, args.live)
+                                        for k in range(args.workers)])
     inputs = sum(r[0] for r in results)
     print(f"{inputs} inputs ({sum(r[1] for r in results)} ran to a tool path), {sum(r[2] for r in results)} crashes, "
           f"slowest input {max(r[3] for r in results):.2f} s, {sum(r[4] for r in results)} slower than {SLOW_S:g} s, "

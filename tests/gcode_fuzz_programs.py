@@ -9,11 +9,15 @@ not one of cosim's own errors is a crash.
 from __future__ import annotations
 
 import random
+from fractions import Fraction
 from pathlib import Path
 
 from cosim.controllers.pokeys.gcode import HostSetup, Tool, toolpath
-from cosim.controllers.pokeys.gcode.flow import ProgramError, parse_text
+from cosim.controllers.pokeys.gcode.flow import ProgramError, SourceFile, parse_text
 from cosim.controllers.pokeys.gcode.interpreter import Interpreter
+from cosim.controllers.pokeys.gcodejob import GcodeJob
+from cosim.controllers.pokeys.pathplan import HostAxis, PathSettings
+from cosim.controllers.pokeys.toolpath import Arc, Line
 from cosim.errors import CosimError
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -21,6 +25,11 @@ SEEDS = [ROOT / "examples" / "pokeys_router" / "pocket.nc", ROOT / "examples" / 
          ROOT / "examples" / "pokeys_cam" / "subs" / "pocket.ngc"]
 MAX_LINES = 20_000
 TOOLS = [Tool(1, z_offset=10, diameter=6), Tool(2, z_offset=20, diameter=3)]
+#: Live runs plan a job only if it would take at most this long (by the static tool path's moves) [min].
+MAX_MINUTES = 10
+#: The live runs' axes: x, y, z at 400 steps/mm, a at 100 steps/degree; and the most slots they plan.
+LIVE_AXES = [*(HostAxis(400, 50, 1000, name=a) for a in "xyz"), HostAxis(100, 360, 3600, name="a")]
+MAX_SLOTS = 2_000_000
 LETTERS = "GMXYZABCIJKRFSPQLDHTN@^$"
 G_CODES = ["0", "1", "2", "3", "4", "5", "5.1", "5.2", "10", "17", "18", "19", "20", "21", "28", "28.1", "30", "33",
            "38.2", "40", "41", "41.1", "42", "43", "43.1", "49", "52", "53", "54", "55", "59.3", "61", "61.1", "64",
@@ -176,14 +185,45 @@ def draw(rng: random.Random, seed_texts: list[str]) -> str:
     return random_text(rng)
 
 
-def exercise(text: str) -> int:
-    """Parse, interpret and convert ``text``; 1 if it ran to a tool path, 0 if refused with cosim's error."""
+def exercise(text: str, *, live: bool = False) -> int:
+    """Parse, interpret and convert ``text``; 1 if it ran to a tool path, 0 if refused with cosim's error.
+
+    ``live``: as a machine file runs it (a 57CNC with an A axis), the interpreter live on 4 digital and 4
+    analog inputs, the job planned piece by piece between its waits (M66: the interpreter goes on with
+    #5399 = 1, 0, -1, 2.5 in turn; M0: cycle start)."""
     try:
         source = parse_text(text, "fuzz.nc")
+        inputs = {"digital": 4, "analog": 4} if live else None
         interp = Interpreter(machine_units="mm", tools=TOOLS, search_path=[ROOT / "examples" / "pokeys_cam" / "subs"],
-                             probe=True, axes="xyzabc", max_lines=MAX_LINES, max_calls=MAX_LINES * 4)
-        program = interp.run(source)
-        toolpath(program, HostSetup(arc_tolerance=__import__("fractions").Fraction(1, 10)))
+                             probe=True, axes="xyza" if live else "xyzabc", max_lines=MAX_LINES,
+                             max_calls=MAX_LINES * 4, inputs=inputs)
+        if not live:
+            toolpath(interp.run(source), HostSetup(arc_tolerance=Fraction(1, 10)))
+            return 1
+        if _minutes(source) > MAX_MINUTES:
+            return 1  # read and run; a job of hours (a mutated X368908) would only cost the planner's time
+        setup = HostSetup(arc_tolerance=Fraction(1, 10), axes="xyza", cycle_start=True, inputs=True)
+        job = GcodeJob(interp, source, setup, LIVE_AXES, settings=PathSettings(arc_tolerance=Fraction(1, 10)),
+                       n_axes=8, max_pulses_per_slot=125)
+        values = [1.0, 0.0, -1.0, 2.5]
+        piece = job.next_piece()
+        while piece.wait is not None and len(job.counts) < MAX_SLOTS:
+            piece = job.next_piece(values[job.pieces % 4] if piece.wait.reads else None)
     except (ProgramError, CosimError):
         return 0
     return 1
+
+
+def _minutes(source: SourceFile) -> float:
+    """About how long the program's moves take [min]: each move's largest axis distance over its feed (a rapid at
+    3000 units/min), the program run once without inputs."""
+    path = toolpath(Interpreter(tools=TOOLS, search_path=[ROOT / "examples" / "pokeys_cam" / "subs"], probe=True,
+                                max_lines=MAX_LINES, max_calls=MAX_LINES * 4).run(source))
+    here, total = (0.0, 0.0, 0.0), 0.0
+    for step in path.steps:
+        if isinstance(step, Line | Arc):
+            end = tuple(float(v) for v in step.end[:3])
+            total += max(abs(a - b) for a, b in zip(end, here, strict=True)) / float(step.feed * 60 if step.feed
+                                                                                      else 3000)
+            here = end
+    return total

@@ -1,7 +1,13 @@
 """LinuxCNC's own interpreter as the oracle of cosim's G-code reader: run both, compare the canonical calls.
 
 ``rs274`` (Debian's ``linuxcnc-uspace``) prints the canonical machining calls of a program, one a
-line, numbers with 4 decimals (``STRAIGHT_FEED(1.0000, ...)``). The same program through cosim's
+line, numbers with 4 decimals (``STRAIGHT_FEED(1.0000, ...)``). To read them at full precision
+rs274 runs under a shim of our own (:data:`SHIM_C`, compiled with the system's C compiler into
+a temporary folder, loaded with ``LD_PRELOAD``): it wraps the C library's ``__fprintf_chk``,
+``__vfprintf_chk`` and ``__printf_chk`` (the fortified ``fprintf``/``printf`` rs274's canonical
+printer calls, ``nm -D /usr/bin/rs274``) and rewrites each ``%.4f`` and ``%f`` of the format to
+``%.17g``, which prints every double so that it reads back bit for bit. LinuxCNC itself is
+neither modified nor copied. The same program through cosim's
 :class:`~cosim.controllers.pokeys.gcode.interpreter.Interpreter`, set up as rs274 runs without a
 configuration (inch machine units: the tool table and stored offsets are in inches; the program
 starts in mm), gives calls of the same names; :func:`compare` lines the two up call by call.
@@ -11,6 +17,7 @@ Used by ``tests/test_gcode_linuxcnc.py``; nothing in ``cosim`` imports it.
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -36,17 +43,78 @@ COMPARED = frozenset({
 #: How many numbers rs274 prints of each call (it leaves out U, V, W).
 PRINTED = {"STRAIGHT_TRAVERSE": 6, "STRAIGHT_FEED": 6, "ARC_FEED": 9, "SET_G5X_OFFSET": 7, "SET_G92_OFFSET": 6,
            "USE_TOOL_LENGTH_OFFSET": 9, "SET_MOTION_CONTROL_MODE": 2}
-#: rs274 prints 4 decimals: a number agrees when within half a unit of the last printed digit.
-PRINTED_TOLERANCE = 0.5e-4 + 1e-9
+#: Issue 26's acceptance: numbers agree to 1e-9 mm (in an inch program: 1e-9 / 25.4 inch).
+TOLERANCE_MM = 1e-9
+#: The shim that makes rs274 print its numbers at full precision (see the module text).
+SHIM_C = r"""
+#define _GNU_SOURCE
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+/* the format with each %.4f and %f as %.17g (the format itself if it does not fit) */
+static const char *widen(const char *fmt, char *out, size_t size) {
+    size_t o = 0;
+    for (const char *p = fmt; *p;) {
+        if (o + 8 >= size) return fmt;
+        if (strncmp(p, "%.4f", 4) == 0) { memcpy(out + o, "%.17g", 5); o += 5; p += 4; }
+        else if (strncmp(p, "%f", 2) == 0) { memcpy(out + o, "%.17g", 5); o += 5; p += 2; }
+        else if (strncmp(p, "%%", 2) == 0) { out[o++] = '%'; out[o++] = '%'; p += 2; }
+        else out[o++] = *p++;
+    }
+    out[o] = 0;
+    return out;
+}
+
+int __vfprintf_chk(FILE *stream, int flag, const char *fmt, va_list ap) {
+    char wide[4096];
+    (void)flag;
+    return vfprintf(stream, widen(fmt, wide, sizeof wide), ap);
+}
+
+int __fprintf_chk(FILE *stream, int flag, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    int n = __vfprintf_chk(stream, flag, fmt, ap);
+    va_end(ap);
+    return n;
+}
+
+int __printf_chk(int flag, const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    int n = __vfprintf_chk(stdout, flag, fmt, ap);
+    va_end(ap);
+    return n;
+}
+"""
 #: The tool table both interpreters use [inch] (rs274 reads tool tables in inches).
 TOOLS = [Tool(n, z_offset=Fraction(n, 10), diameter=Fraction(n, 40)) for n in range(1, 100)]
 _LINE = re.compile(r"^\s*\d+ N\S* +([A-Z_0-9]+)\((.*)\)\s*$")
-_TOKEN = re.compile(r'"[^"]*"|[-+]?\d+\.\d*|[-+]?\d+|[A-Z_]+')
+_TOKEN = re.compile(r'"[^"]*"|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|-?(?:inf|nan)|[A-Z_]+')
 
 
 def rs274() -> str | None:
     """The path of LinuxCNC's standalone interpreter, or None."""
     return shutil.which("rs274")
+
+
+def compiler() -> str | None:
+    """The C compiler the shim is built with, or None."""
+    return shutil.which("gcc") or shutil.which("cc")
+
+
+def build_shim(folder: Path) -> Path:
+    """Compile :data:`SHIM_C` into ``folder``; the shared library's path."""
+    source = folder / "rs274_full_precision.c"
+    library = folder / "rs274_full_precision.so"
+    source.write_text(SHIM_C)
+    cc = compiler()
+    if cc is None:
+        raise RuntimeError("no C compiler (gcc or cc) to build the rs274 full-precision shim")
+    subprocess.run([cc, "-shared", "-fPIC", "-O2", "-o", str(library), str(source)], check=True,
+                   capture_output=True, text=True)
+    return library
 
 
 @dataclass
@@ -70,7 +138,7 @@ def _tokens(text: str) -> tuple[object, ...]:
 
 
 def setup(folder: Path) -> tuple[Path, Path]:
-    """Write the tool table and the INI file rs274 runs with; their paths."""
+    """Write the tool table and the INI file rs274 runs with (in ``folder``); their paths."""
     table = folder / "tools.tbl"
     table.write_text("".join(f"T{t.number} P{t.number} D{float(t.diameter):.6f} Z+{float(t.z_offset):.6f}\n"
                              for t in TOOLS))
@@ -81,10 +149,11 @@ def setup(folder: Path) -> tuple[Path, Path]:
     return table, ini
 
 
-def run_rs274(program: Path, table: Path, ini: Path, *, timeout_s: float = 60) -> Outcome:
-    """``rs274 -g`` on ``program`` (from its own folder), its compared calls."""
+def run_rs274(program: Path, table: Path, ini: Path, *, shim: Path | None = None, timeout_s: float = 60) -> Outcome:
+    """``rs274 -g`` on ``program`` (from its own folder), its compared calls (full precision with ``shim``)."""
+    env = dict(os.environ, LD_PRELOAD=str(shim)) if shim is not None else None
     done = subprocess.run(["rs274", "-i", str(ini), "-t", str(table), "-g", str(program)], cwd=program.parent,
-                          stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout_s)
+                          stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout_s, env=env)
     calls = []
     error = None
     for line in done.stdout.splitlines():
@@ -145,11 +214,16 @@ def _ours(program: CanonProgram) -> list[tuple[str, tuple[object, ...]]]:
     return out
 
 
-def compare(theirs: Outcome, ours: Outcome) -> str | None:
-    """None if the two agree call by call (numbers within rs274's printed precision), else the first difference."""
+def compare(theirs: Outcome, ours: Outcome, *, tolerance_mm: float = TOLERANCE_MM) -> str | None:
+    """None if the two agree call by call (numbers within ``tolerance_mm`` in mm programs, ``tolerance_mm / 25.4``
+    in inch programs), else the first difference."""
+    tolerance = tolerance_mm
     for k, (a, b) in enumerate(zip(theirs.calls, ours.calls, strict=False)):
-        if a[0] != b[0] or len(a[1]) != len(b[1]) or not all(_same(x, y) for x, y in zip(a[1], b[1], strict=True)):
+        if a[0] != b[0] or len(a[1]) != len(b[1]) or \
+                not all(_same(x, y, tolerance) for x, y in zip(a[1], b[1], strict=True)):
             return f"call {k}: LinuxCNC {_show(a)}, cosim {_show(b)}"
+        if a[0] == "USE_LENGTH_UNITS":
+            tolerance = tolerance_mm / 25.4 if a[1] == ("INCHES",) else tolerance_mm
     if len(theirs.calls) != len(ours.calls):
         k = min(len(theirs.calls), len(ours.calls))
         extra = theirs.calls[k] if len(theirs.calls) > k else ours.calls[k]
@@ -160,18 +234,29 @@ def compare(theirs: Outcome, ours: Outcome) -> str | None:
     return None
 
 
-def agree(theirs: Outcome, ours: Outcome) -> str | None:
+def agree(theirs: Outcome, ours: Outcome, *, tolerance_mm: float = TOLERANCE_MM) -> str | None:
     """None if both refuse the program, or both run it with the same calls; else the first difference."""
     if theirs.error is not None and ours.error is not None:
         return None
-    return compare(theirs, ours)
+    return compare(theirs, ours, tolerance_mm=tolerance_mm)
 
 
-def _same(x: object, y: object) -> bool:
+def largest_difference(theirs: Outcome, ours: Outcome) -> float:
+    """The largest difference of any two numbers the two interpreters give, call by call [program units]."""
+    largest = 0.0
+    for a, b in zip(theirs.calls, ours.calls, strict=False):
+        if a[0] == b[0] and len(a[1]) == len(b[1]):
+            for x, y in zip(a[1], b[1], strict=True):
+                if isinstance(x, float) and isinstance(y, float):
+                    largest = max(largest, abs(x - y))
+    return largest
+
+
+def _same(x: object, y: object, tolerance: float) -> bool:
     if isinstance(x, float) and isinstance(y, float):
-        return abs(x - y) <= PRINTED_TOLERANCE * max(1.0, abs(x) * 1e-8 / PRINTED_TOLERANCE)
+        return abs(x - y) <= tolerance
     return x == y
 
 
 def _show(call: tuple[str, tuple[object, ...]]) -> str:
-    return f"{call[0]}({', '.join(f'{a:.4f}' if isinstance(a, float) else str(a) for a in call[1])})"
+    return f"{call[0]}({', '.join(repr(a) if isinstance(a, float) else str(a) for a in call[1])})"

@@ -169,6 +169,14 @@ def _endless() -> None:
         raise ConfigurationError(str(exc)) from None
 
 
+def test_an_if_needs_its_endif_only_when_the_program_gets_there() -> None:
+    """rs274 2.9 runs ``O1 if [1]`` / ``M2`` (no endif: the program ends in the branch) and refuses ``O1 if [0]`` /
+    ``M2`` (it looks for the endif)."""
+    assert run("O1 if [1]\nG0 X1\nM2\n").end == "M2"
+    with pytest.raises(ConfigurationError, match=r"p.nc:1:4: O-word `if` o1: no matching endif"):
+        run("O1 if [0]\nG0 X1\nM2\n")
+
+
 # -- 3. motion ----------------------------------------------------------------------------------
 def test_arcs_in_the_three_planes_with_helix_turns_and_absolute_centres() -> None:
     """rs274: G18 G2 X5 Z0 I1 K1 from (X3, Z0): ARC_FEED(0, 5, 1, 4, -1, 7) (first axis Z, second X, normal Y);
@@ -218,6 +226,47 @@ def test_canned_cycles_with_retract_modes_and_repeats() -> None:
     assert dwell == [("STRAIGHT_FEED", 1, 1, -2, 0, 0, 0, 0, 0, 0), ("DWELL", 0.5)]
     with pytest.raises(ConfigurationError, match=r"R clearance plane unspecified in canned cycle G81"):
         run("G81 X1 Z-1 F10\nM2\n")
+    with pytest.raises(ConfigurationError, match=r"p.nc:1:18: Cannot do zero repeats of cycle"):  # rs274's message
+        run("G81 X1 Y1 Z-1 R1 L0 F10\nM2\n")
+
+
+def test_g87_back_boring_and_g88_manual_retract_as_rs274_runs_them() -> None:
+    """The reference: G87 and G88 are "accepted, but the behavior is undefined"; rs274 2.9 (G21 G0 Z5, S100 M3,
+    G87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5) prints: traverses (1 1 5) (1 1 1) (1.5 1.25 1), STOP_SPINDLE_TURNING,
+    ORIENT_SPINDLE(0, 0, 2), traverses (1.5 1.25 -1) (1 1 -1), START_SPINDLE_CLOCKWISE, feeds (1 1 -0.5) (1 1 -1),
+    STOP, ORIENT, traverses (1.5 1.25 -1) (1.5 1.25 1) (1 1 1), START_SPINDLE_CLOCKWISE; under G91 K is from the
+    bottom; G88 P1.5 feeds to the bottom, DWELL(1.5), STOP_SPINDLE_TURNING, PROGRAM_STOP,
+    START_SPINDLE_CLOCKWISE."""
+    names = ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STOP_SPINDLE_TURNING", "ORIENT_SPINDLE", "START_SPINDLE_CLOCKWISE",
+             "DWELL", "PROGRAM_STOP")
+    back = [(c[0], *c[1:4]) if c[0].startswith("STRAIGHT") else c
+            for c in calls("G21 G0 Z5\nS100 M3\nG87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5 F100\nM2\n", *names)]
+    assert back[2:] == [
+        ("STRAIGHT_TRAVERSE", 1, 1, 5), ("STRAIGHT_TRAVERSE", 1, 1, 1), ("STRAIGHT_TRAVERSE", 1.5, 1.25, 1),
+        ("STOP_SPINDLE_TURNING", 0), ("ORIENT_SPINDLE", 0, 0, 2), ("STRAIGHT_TRAVERSE", 1.5, 1.25, -1),
+        ("STRAIGHT_TRAVERSE", 1, 1, -1), ("START_SPINDLE_CLOCKWISE", 0), ("STRAIGHT_FEED", 1, 1, -0.5),
+        ("STRAIGHT_FEED", 1, 1, -1), ("STOP_SPINDLE_TURNING", 0), ("ORIENT_SPINDLE", 0, 0, 2),
+        ("STRAIGHT_TRAVERSE", 1.5, 1.25, -1), ("STRAIGHT_TRAVERSE", 1.5, 1.25, 1), ("STRAIGHT_TRAVERSE", 1, 1, 1),
+        ("START_SPINDLE_CLOCKWISE", 0), ("STOP_SPINDLE_TURNING", 0)]
+    incremental = ends("G21 G0 Z5\nS100 M3 G91\nG87 X1 Y1 Z-1 R1 I0.5 J0.25 K-0.5 F100\nM2\n")
+    assert (1, 1, 4.5) in incremental  # rs274: STRAIGHT_FEED(1.0000, 1.0000, 4.5000, ...) (R 6, bottom 5)
+    manual = calls("G21 G0 Z5\nS100 M3\nG88 X1 Y1 Z-1 R1 P1.5 F100\nM2\n", *names)
+    assert manual[4:9] == [("STRAIGHT_FEED", 1, 1, -1, 0, 0, 0, 0, 0, 0), ("DWELL", 1.5), ("STOP_SPINDLE_TURNING", 0),
+                           ("PROGRAM_STOP",), ("START_SPINDLE_CLOCKWISE", 0)]
+    with pytest.raises(ConfigurationError, match=r"p.nc:2:1: K word missing with g87"):
+        run("S100 M3\nG87 X1 Y1 Z-1 R1 I1 J1 F100\nM2\n")
+
+
+@pytest.mark.parametrize(("spindle", "cycle", "message"), [
+    ("", "G86 X1 Y1 Z-1 R1 P1", "Spindle not turning in g86"), ("", "G84 X1 Y1 Z-1 R1", "Spindle not turning in G84"),
+    ("S100 M4", "G84 X1 Y1 Z-1 R1", "Spindle turning counterclockwise in G84"),
+    ("S100 M3", "G74 X1 Y1 Z-1 R1", "Spindle turning clockwise in G74"),
+    ("", "G87 X1 Y1 Z-1 R1 I1 J1 K0", "Spindle not turning in g87"),
+    ("", "G88 X1 Y1 Z-1 R1 P1", "Spindle not turning in g88")])
+def test_cycles_that_need_the_spindle_refuse_as_rs274(spindle: str, cycle: str, message: str) -> None:
+    """rs274 2.9's messages, spelling included."""
+    with pytest.raises(ConfigurationError, match=rf"p.nc:2:1: {message}"):
+        run(f"G21 {spindle}\n{cycle} F100\nM2\n")
 
 
 # -- 4. coordinates and tools ---------------------------------------------------------------------
@@ -277,6 +326,9 @@ def test_g61_g61_1_and_g64_p_q_become_path_control_and_change_the_job_time() -> 
     assert calls("G64 P0.1 Q0.05\nG61\nG61.1\nM2\n", "SET_MOTION_CONTROL_MODE", "SET_NAIVECAM_TOLERANCE") == [
         ("SET_MOTION_CONTROL_MODE", "CONTINUOUS", 0.1), ("SET_NAIVECAM_TOLERANCE", 0.05),
         ("SET_MOTION_CONTROL_MODE", "EXACT_PATH", 0), ("SET_MOTION_CONTROL_MODE", "EXACT_STOP", 0)]
+    # rs274: a negative P or Q is as none: G64 P-1 Q-2 prints CONTINUOUS, 0.000000 and NAIVECAM 0.0000
+    assert calls("G64 P-1 Q-2\nM2\n", "SET_MOTION_CONTROL_MODE", "SET_NAIVECAM_TOLERANCE") == [
+        ("SET_MOTION_CONTROL_MODE", "CONTINUOUS", 0), ("SET_NAIVECAM_TOLERANCE", 0)]
     square = "G1 X20 F3000\nY20\nX0\nY0\n" * 3 + "M2\n"
     axes = [HostAxis(400, 50, 500, name=a) for a in "xyz"]
 
@@ -317,6 +369,19 @@ def test_overrides_waits_and_saved_states() -> None:
     assert [u[1] for u in units] == ["MM", "INCHES", "MM", "INCHES", "MM"]
 
 
+def test_m19_orients_the_spindle_as_rs274_prints_it() -> None:
+    """Reference: M19 R- (0-360 degrees) Q- (seconds to wait) P- (0 shortest, 1 clockwise, 2 counter-clockwise). rs274
+    2.9: M19 R45 Q1 P1 -> ORIENT_SPINDLE(0, 45.0000, 1), SPINDLE.0.WAIT_ORIENT_COMPLETE(1.0000); M19 P2 ->
+    ORIENT_SPINDLE(0, 0.0000, 2); a bare M19 prints nothing; R-10: "R value must be within 0..360 with M19"."""
+    assert calls("M19 R45 Q1 P1\nM19 P2\nM19\nM2\n", "ORIENT_SPINDLE", "WAIT_ORIENT_COMPLETE") == [
+        ("ORIENT_SPINDLE", 0, 45, 1), ("WAIT_ORIENT_COMPLETE", 0, 1), ("ORIENT_SPINDLE", 0, 0, 2)]
+    for line, message in [("M19 R-10", "R value must be within 0..360 with M19"),
+                          ("M19 P3", "P value must be 0,1,or 2 with M19"),
+                          ("M19 R10 Q0", "Q word with M19 requires a value > 0")]:
+        with pytest.raises(ConfigurationError, match=rf"p.nc:1:1: {message}"):
+            run(f"{line}\nM2\n")
+
+
 def test_program_end_resets_as_linuxcnc_and_stops_the_spindle_and_coolant() -> None:
     """rs274 for M8 / M2: ... STOP_SPINDLE_TURNING, FLOOD_OFF, PROGRAM_END; M30 adds PALLET_SHUTTLE."""
     names = [c.name for c in run("M8\nM30\n").calls]
@@ -326,7 +391,7 @@ def test_program_end_resets_as_linuxcnc_and_stops_the_spindle_and_coolant() -> N
 # -- 7. more axes ---------------------------------------------------------------------------------
 def test_rotary_axes_on_a_machine_that_has_them_and_refused_on_one_that_has_not() -> None:
     assert run("G0 A90 B-10 C5\nM2\n").motion()[0].args[3:6] == (90, -10, 5)
-    with pytest.raises(ConfigurationError, match=r"p.nc:1:4: Bad character 'a' used: the machine has no A axis"):
+    with pytest.raises(ConfigurationError, match=r"p.nc:1:4: A word: the machine has no A axis"):
         run("G0 A90\nM2\n", axes="xyz")
     path = read_program("G0 X1 A90\nM2\n", axes="xyza")
     assert any("A moves: the host planner drives x, y, z" in n for n in path.notes)

@@ -70,7 +70,8 @@ def test_a_binary_file_is_not_gcode(tmp_path: Path) -> None:
     ("M3 S100\nG33 Z-1 K1\n", r"^p.nc:2:1: G33 \(spindle-synchronised motion\) needs a spindle encoder"),
     ("G76 P0.05 Z-1 I-0.07 J0.01 K0.03\n", r"^p.nc:1:1: G76 \(threading\) is spindle-synchronised"),
     ("G0 X1 M101\n", r"^p.nc:1:7: M101 is a user M code"),
-    ("G1 A10 F100\n", r"^p.nc:1:4: Bad character 'a' used: the machine has no A axis \(its axes: X, Y, Z\)"),
+    ("G1 A10 F100\n", r"^p.nc:1:4: A word: the machine has no A axis \(its axes: X, Y, Z\) \(LinuxCNC: Bad "
+                      r"character 'a' used\)"),
     ("o<nothere> call\n", r"^p.nc:1:12: O-word `call` o<nothere>: the subroutine is not defined; no nothere.ngc on "
                           r"the subroutine search path"),
     ("G5.2 X1 Y1 P1 L3 F10\n", r"^p.nc:1:1: G5.2 \(NURBS\) is not supported"),

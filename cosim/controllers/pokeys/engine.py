@@ -143,6 +143,7 @@ class PulseEngine:
         self.axis_state_signals = [Signal(sim, f"{name}.{a}.axis_state", kind="int",
                                           description=f"axis state {a} (AxisState codes)") for a in names]
         self.switches = SwitchInputs(sim, cfg, name=name)
+        self.host_inputs: list[Signal] = []  # inputs the host reads (a G-code job's M66 and cycle start)
         self.state_signal = Signal(sim, f"{name}.state", kind="int", description="engine state (EngineState codes)")
         self.buffer_level = Register(sim, f"{name}.buffer_level", unit="slots",
                                      description="queued slots in the 128-slot buffer")
@@ -367,9 +368,9 @@ class PulseEngine:
         return [*self.steps, *self.dirs]
 
     def inputs(self) -> list[Signal]:
-        """Every signal the engine reads: limit, home and emergency inputs."""
+        """Every signal the engine reads: limit, home and emergency inputs (and those its host reads)."""
         sw = self.switches
-        return [*sw.limit_pos, *sw.limit_neg, *sw.home, sw.emergency]
+        return [*sw.limit_pos, *sw.limit_neg, *sw.home, sw.emergency, *self.host_inputs]
 
     # -- the slot process ---------------------------------------------------------------------
     def pulse_slot(self) -> Generator[Any, Any, None]:

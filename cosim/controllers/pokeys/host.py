@@ -18,23 +18,43 @@ in the middle of the job is the engine's underrun (:class:`~cosim.controllers.po
 Times given in nanoseconds (``period_ns``, ``start_ns``, stalls) are converted once to ticks of
 the simulation's resolution, which refuses a time that is not a whole number of ticks; times the
 host records (:class:`FillRecord`, :attr:`HostApp.t_buffer_mode`) are in ticks.
+
+**Waits.** A job may end in a :class:`~cosim.controllers.pokeys.toolpath.Wait` (a G-code M66 on an
+input, an M0 resumed by cycle start): the rest of the job comes from ``next_piece`` once the wait
+has ended. While it waits the host keeps the buffer at its level with *idle* slots (no pulses,
+the direction bits as they were), so the engine never runs dry; the wait starts when the engine
+takes the first idle slot (the motion before it has ended). At each of its cycles from then on
+the host reads the input (its value at that instant: a pulse between two cycles is missed, as
+by any polling host) and, as LinuxCNC's M66 does, ends the wait: L0 at once with the value; L3 /
+L4 when the input is high / low; L1 / L2 on a rise / fall (seen low, then high; seen high, then
+low); or, ``timeout`` seconds after the start, with -1. The idle slots not yet sent are dropped
+and the next piece follows the ones the device has taken: motion resumes after the idle slots
+still queued (up to ``prefill_slots``), the host's latency.
 """
 
 from __future__ import annotations
 
-from collections.abc import Generator, Iterator, Sequence
+import math
+from collections.abc import Callable, Generator, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, overload
 
 from cosim.controllers.pokeys.buffer import Entry, check_entry, signed_count
 from cosim.controllers.pokeys.engine import PulseEngine
-from cosim.controllers.pokeys.limits import BUFFER_SLOTS, COUNT_MASK, FILL_SLOTS_PER_PACKET, SLOT_NS
+from cosim.controllers.pokeys.limits import BUFFER_SLOTS, COUNT_MASK, DIRECTION_BIT, FILL_SLOTS_PER_PACKET, SLOT_NS
 from cosim.controllers.pokeys.link import Link, LinkProfile
 from cosim.controllers.pokeys.states import EngineState
+from cosim.controllers.pokeys.toolpath import Wait
 from cosim.errors import ConfigurationError
 from cosim.kernel import Simulation
+from cosim.signals import Signal
 from cosim.timebase import Priority
 from cosim.validate import integer
+
+NextPiece = Callable[[float | None, int, tuple[bool, ...]], tuple[Sequence[object], Wait | None]]
+"""``next_piece(value, first_index, direction_bits) -> (entries, wait)``: the job's next entries after a wait
+(``value``: what the wait read, None for a wait that reads nothing), which start at entry ``first_index``
+with the engine's direction bits ``direction_bits``, and the wait that ends them (None: the job's end)."""
 
 
 @dataclass(frozen=True)
@@ -145,6 +165,12 @@ class HostApp:
         When the host starts [ns].
     keep_fills : int
         Fill round trips kept in full in :attr:`fills` (the first ones; all are counted).
+    wait : Wait, optional
+        The wait that ends ``entries`` (see the module text); then ``next_piece`` gives the rest.
+    next_piece : callable, optional
+        :data:`NextPiece`: the job's entries after a wait.
+    inputs : mapping of str to Signal
+        The inputs a wait may read, by name (``din0``, ``ain1``, ``cycle_start``); one not given reads 0.
 
     Attributes
     ----------
@@ -154,12 +180,15 @@ class HostApp:
         When the host sent "buffer mode" [ticks] (its own clock's origin for the queued-slot estimate).
     t_last_accepted : int or None
         When the device accepted the job's last slots [ticks].
+    waits : list of tuple
+        The waits ended so far: (wait, start, end [ticks], value read or -1 after the timeout).
     """
 
     def __init__(self, sim: Simulation, engine: PulseEngine, entries: Sequence[object], *,
                  link: str | LinkProfile = "usb", period_ns: int = 1_000_000, prefill_slots: int = BUFFER_SLOTS,
                  max_slots_per_fill: int = FILL_SLOTS_PER_PACKET, stalls: Sequence[Stall] = (),
-                 start_ns: int = 0, keep_fills: int = 1000) -> None:
+                 start_ns: int = 0, keep_fills: int = 1000, wait: Wait | None = None,
+                 next_piece: NextPiece | None = None, inputs: Mapping[str, Signal] | None = None) -> None:
         self.sim = sim
         self.engine = engine
         # equal entries share one object: a job of an hour holds millions of slots, mostly repeats
@@ -184,12 +213,20 @@ class HostApp:
         self.fills = FillLog(keep_fills)
         self.t_buffer_mode: int | None = None
         self.t_last_accepted: int | None = None
+        self.inputs = dict(inputs or {})
+        if wait is not None and next_piece is None:
+            raise ConfigurationError(f"host: the job waits on {wait.input} (line {wait.line}) and nothing gives what "
+                                     "comes after (next_piece)")
+        self.next_piece = next_piece
+        self.wait: Wait | None = None
+        self.waits: list[tuple[Wait, int, int, float]] = []
+        self._begin_wait(wait)
         sim.process(self.refill_buffer())
 
     @property
     def finished(self) -> bool:
-        """Every slot of the job was accepted by the device."""
-        return self.read_pointer >= len(self.entries)
+        """Every slot of the job was accepted by the device (and no wait is left)."""
+        return self.read_pointer >= len(self.entries) and self.wait is None
 
     def stall_end(self, t: int) -> int | None:
         """End of the stall containing ``t`` [ticks], or None."""
@@ -208,7 +245,12 @@ class HostApp:
             if end is not None:
                 yield sim.at(end, Priority.HOST)
             started = self.t_buffer_mode is not None
+            if self.wait is not None and started:
+                self._check_wait()
             want = self.prefill_slots - self._estimated_level() if started else self.prefill_slots - self.read_pointer
+            if self.wait is not None:  # idle slots while the host waits
+                self.entries.extend([self._idle] * max(0, min(want, self.max_slots_per_fill)
+                                                       - (len(self.entries) - self.read_pointer)))
             want = min(want, self.max_slots_per_fill, len(self.entries) - self.read_pointer)
             full = False
             if want > 0:
@@ -218,6 +260,54 @@ class HostApp:
                 continue
             k = max(k + 1, -(-(sim.now - self.start) // self.period))
             yield sim.at(self.start + k * self.period, Priority.HOST)
+
+    # -- waits ------------------------------------------------------------------------------------------
+    def _begin_wait(self, wait: Wait | None) -> None:
+        self.wait = wait
+        self._wait_index = len(self.entries)  # the first idle slot
+        self._wait_start: int | None = None
+        self._seen = False  # rise: the input was seen low (fall: high)
+        self._timeout = None if wait is None or wait.timeout is None else \
+            math.ceil(wait.timeout * self.sim.ticks(1, "s"))
+        last = self.entries[-1] if self.entries else bytes(len(self.engine.axis_names))
+        self._idle: Entry = bytes(b & DIRECTION_BIT for b in last)
+
+    def _check_wait(self) -> None:
+        """One reading of the input at this cycle; the wait ends if it says so."""
+        wait, engine, now = self.wait, self.engine, self.sim.now
+        assert wait is not None
+        if self._wait_start is None:
+            if engine.buffer.taken <= self._wait_index:
+                return  # the motion before the wait is still running
+            self._wait_start = engine.t0 + (engine.slot_index - 1 - (engine.buffer.taken - 1 - self._wait_index)) \
+                * engine.slot_ticks
+        signal = self.inputs.get(wait.input)
+        value = signal.value if signal is not None else 0  # an input nothing drives reads 0
+        high = bool(value)
+        done: float | None = None
+        if wait.mode == 0:
+            done = float(value)
+        elif wait.mode in (3, 4):
+            done = float(high) if high == (wait.mode == 3) else None
+        elif high != (wait.mode == 1):
+            self._seen = True
+        elif self._seen:
+            done = float(high)
+        if done is None and self._timeout is not None and now - self._wait_start >= self._timeout:
+            done = -1.0
+        if done is not None:
+            self._end_wait(done)
+
+    def _end_wait(self, value: float) -> None:
+        wait = self.wait
+        assert wait is not None and self.next_piece is not None and self._wait_start is not None
+        self.waits.append((wait, self._wait_start, self.sim.now, value))
+        del self.entries[max(self.read_pointer, self._wait_index):]  # idle slots not sent
+        first = len(self.entries)
+        bits = tuple(bool(b & DIRECTION_BIT) for b in self._idle)
+        entries, after = self.next_piece(value if wait.reads else None, first, bits)
+        self.entries.extend(_checked(self.engine, e, first + i) for i, e in enumerate(entries))
+        self._begin_wait(after)
 
     def _estimated_level(self) -> int:
         assert self.t_buffer_mode is not None

@@ -10,6 +10,10 @@ time. :class:`JobWatch` also records when the job's first and last slots ran (it
 It counts the entries the engine has taken (:attr:`~cosim.controllers.pokeys.buffer.SlotBuffer.taken`)
 and sleeps until the earliest slot start at which the next marked slot can be taken (one entry per
 slot at most), so it costs a few kernel events per mark, not one per slot.
+
+A job with waits grows while it runs (:mod:`~cosim.controllers.pokeys.gcodejob`): :meth:`JobWatch.extend`
+adds the slots and outputs of each piece the host gets after a wait, and the job's last slot is
+known once the last piece is in (``complete``).
 """
 
 from __future__ import annotations
@@ -39,6 +43,8 @@ class JobWatch:
         Output changes and the index of the job slot they start at (``slots``: after the last one).
     on_end : callable, optional
         Called (no arguments) at the start of the slot after the job's last one: the buffer has drained.
+    complete : bool
+        The job's slots are all given (default); False: more come with :meth:`extend`.
 
     Attributes
     ----------
@@ -48,13 +54,13 @@ class JobWatch:
         ``<engine>.spindle.on`` (M3/M4 = 1, M5 = 0), ``.ccw`` (M4), ``.speed`` (S).
     signals : dict of str to Signal
         ``<engine>.<name>`` of every :class:`~cosim.controllers.pokeys.toolpath.Output` of the job
-        (``coolant_flood``, ``coolant_mist``, ``tool``, ``tool_changing``, ``paused``, ``dout<n>``,
-        ``aout<n>``), from 0.
+        (``coolant_flood``, ``coolant_mist``, ``tool``, ``tool_changing``, ``paused``, ``waiting``,
+        ``dout<n>``, ``aout<n>``), from 0.
     """
 
     def __init__(self, sim: Simulation, engine: PulseEngine, *, slots: int,
                  outputs: Sequence[tuple[int, Spindle | Output | Message]] = (),
-                 on_end: Callable[[], None] | None = None) -> None:
+                 on_end: Callable[[], None] | None = None, complete: bool = True) -> None:
         self.sim = sim
         self.engine = engine
         self.slots = integer(slots, "job slots", low=0)
@@ -62,18 +68,15 @@ class JobWatch:
         self.spindle_on = Signal(sim, f"{name}.spindle.on", description="spindle (or laser) on: M3, M4; off: M5")
         self.spindle_ccw = Signal(sim, f"{name}.spindle.ccw", description="spindle counter-clockwise (M4)")
         self.spindle_speed = Signal(sim, f"{name}.spindle.speed", kind="real", description="spindle speed (S word)")
-        self.outputs = sorted(outputs, key=lambda item: item[0])
+        self.outputs: list[tuple[int, Spindle | Output | Message]] = []
         self.signals: dict[str, Signal] = {}
-        for index, record in self.outputs:
-            integer(index, "output slot", low=0, high=self.slots)
-            if isinstance(record, Output) and record.name not in self.signals:
-                self.signals[record.name] = Signal(sim, f"{name}.{record.name}", kind=_kind(record.name),
-                                                   description=_DESCRIPTIONS.get(record.name.rstrip("0123456789"),
-                                                                                 "a G-code output"))
+        self.complete = complete
+        self._more: Any = None  # the event follow_job waits on for more of a growing job
+        self._add(outputs)
         self.on_end = on_end
         self.t_first: int | None = None
         self.t_last: int | None = None
-        if self.slots:
+        if self.slots or not complete:
             sim.process(self.follow_job())
         else:
             for _, record in self.outputs:
@@ -88,21 +91,56 @@ class JobWatch:
             return None
         return self.t_last + self.engine.slot_ticks - self.t_first
 
+    def extend(self, slots: int, outputs: Sequence[tuple[int, Spindle | Output | Message]] = (), *,
+               complete: bool) -> None:
+        """The job has ``slots`` entries now, and these ``outputs`` (job slot indices) more; ``complete``: no more
+        come."""
+        self.slots = integer(slots, "job slots", low=self.slots)
+        self._add(outputs)
+        self.complete = complete
+        if self._more is not None and not self._more.triggered:
+            self._more.succeed()
+
+    def _add(self, outputs: Sequence[tuple[int, Spindle | Output | Message]]) -> None:
+        name = self.engine.name
+        for index, record in sorted(outputs, key=lambda item: item[0]):
+            integer(index, "output slot", low=self.outputs[-1][0] if self.outputs else 0, high=self.slots)
+            self.outputs.append((index, record))
+            if isinstance(record, Output) and record.name not in self.signals:
+                self.signals[record.name] = Signal(self.sim, f"{name}.{record.name}", kind=_kind(record.name),
+                                                   description=_DESCRIPTIONS.get(record.name.rstrip("0123456789"),
+                                                                                 "a G-code output"))
+
     def follow_job(self) -> Generator[Any, Any, None]:
         """SimPy process: wait for each marked slot to be taken; switch outputs, note first and last."""
-        last = self.slots - 1
-        pending = list(self.outputs)
-        for index in sorted({0, last} | {min(i, last) for i, _ in pending}):
+        pending = self.outputs
+        done = 0  # outputs applied
+        while True:
+            last = self.slots - 1 if self.complete else None
+            marks = [] if self.t_first is not None or self.slots == 0 else [0]
+            if done < len(pending) and (last is None or pending[done][0] <= last):
+                marks.append(pending[done][0])
+            if last is not None and last >= 0 and self.t_last is None:
+                marks.append(last)
+            if not marks:
+                if last is not None:
+                    break
+                self._more = self.sim.env.event()
+                yield self._more
+                self._more = None
+                continue
+            index = min(marks)
             t = yield from self._taken(index)
-            if index == 0:
+            if index == 0 and self.t_first is None:
                 self.t_first = t
-            if index == last:
+            if self.complete and index == self.slots - 1:
                 self.t_last = t
-            while pending and pending[0][0] == index:
-                self._apply(pending.pop(0)[1])
+            while done < len(pending) and pending[done][0] == index:
+                self._apply(pending[done][1])
+                done += 1
         # after the job: at the start of the slot after its last one
         yield self.sim.at(self.sim.now + self.engine.slot_ticks, Priority.HOST)
-        for _, record in pending:
+        for _, record in pending[done:]:
             self._apply(record)
         if self.on_end is not None:
             self.on_end()
@@ -133,6 +171,7 @@ class JobWatch:
 _DESCRIPTIONS = {"coolant_flood": "flood coolant (M8 on, M9 off)", "coolant_mist": "mist coolant (M7 on, M9 off)",
                  "tool": "the tool in the spindle (M6, M61)", "tool_changing": "1 while a tool change (M6) runs",
                  "paused": "1 while the program is paused (M0, M1, M60) until the operator resumes",
+                 "waiting": "1 while an M66 waits on an input (L1-L4)",
                  "dout": "digital output (M62/M64 on, M63/M65 off)", "aout": "analog output (M67, M68)"}
 
 

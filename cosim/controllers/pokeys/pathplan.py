@@ -11,12 +11,15 @@ Rules, in order:
    quarter turn each); chord points are computed in double precision and rounded to steps, the
    arc's end point is exact.
 3. **Speeds.** A feed move runs at ``F * feed_override`` along its path (the XYZ length in
-   machine units), a rapid at the axes' limits; either is slowed so that no axis exceeds its
+   machine units; a move without XYZ motion: its UVW length, else its ABC length in degrees, as
+   :func:`~cosim.controllers.pokeys.toolpath.feed_axes` says; the other axes move in proportion),
+   a rapid at the axes' limits; either is slowed so that no axis exceeds its
    ``max_velocity`` nor the engine's pulses per slot (25 on a 56E), nor accelerates faster than its
    ``max_accel``. A feed the machine cannot run is slowed and **said so** (:attr:`PlannedJob.notes`,
    one per program line with the feed it got and the axis that limits it).
 4. **Corners.** ``mode = "exact_stop"`` (default, LinuxCNC's ``G61.1``): every segment, arc chords
-   included, ends at rest. ``mode = "blend"``: corners are passed at the *junction-deviation
+   included, ends at rest; so does a segment whose feed axes differ from the next one's (XYZ, UVW,
+   ABC: their path speeds are in different units). ``mode = "blend"``: corners are passed at the *junction-deviation
    speed* (the rule of grbl and Marlin): the speed at which a circular arc tangent to both segments
    and passing ``tolerance`` from the corner could be taken at the acceleration limit,
    ``v^2 = a * tolerance * sin(theta/2) / (1 - sin(theta/2))`` with ``theta`` the angle between the
@@ -44,7 +47,20 @@ from functools import cached_property
 from math import isqrt, lcm
 
 from cosim.controllers.pokeys.limits import AXIS_NAMES, MAX_PULSES_PER_SLOT, SLOTS_PER_S
-from cosim.controllers.pokeys.toolpath import Arc, Line, Message, Output, PathControl, Pause, Point, Spindle, Toolpath
+from cosim.controllers.pokeys.toolpath import (
+    LINEAR_GROUPS,
+    Arc,
+    Line,
+    Message,
+    Output,
+    PathControl,
+    Pause,
+    Point,
+    Spindle,
+    Toolpath,
+    Wait,
+    feed_axes,
+)
 from cosim.controllers.pokeys.trajectory import Counts, Segment, profile_chain
 from cosim.errors import ConfigurationError
 from cosim.validate import choice, in_range, integer, positive
@@ -153,7 +169,8 @@ class PlannedJob:
 
 def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: PathSettings | None = None,
                   max_pulses_per_slot: int = MAX_PULSES_PER_SLOT, n_axes: int = 3) -> PlannedJob:
-    """Plan ``toolpath`` for the x, y, z ``axes`` into per-slot counts of ``n_axes`` engine axes.
+    """Plan ``toolpath`` for its ``axes`` (x, y, z and the others of :attr:`Toolpath.axes`, one HostAxis each)
+    into per-slot counts of ``n_axes`` engine axes (each tool path axis drives the engine axis of its name).
 
     Examples
     --------
@@ -164,10 +181,16 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
     ([4000, 2001, 0], (4000, 2001, 0))
     """
     settings = settings or PathSettings()
-    if len(axes) != 3 or not all(isinstance(a, HostAxis) for a in axes):
-        raise ConfigurationError.out_of_range("tool path axes", len(axes), "3 HostAxis (x, y, z)")
+    names = toolpath.axes
+    if len(axes) != len(names) or not all(isinstance(a, HostAxis) for a in axes):
+        raise ConfigurationError.out_of_range("tool path axes", len(axes),
+                                              f"{len(names)} HostAxis ({', '.join(names)})")
     integer(max_pulses_per_slot, "max_pulses_per_slot", low=1, high=127, unit="pulses")
     integer(n_axes, "n_axes", low=3, high=len(AXIS_NAMES))
+    for name in names:
+        if name not in AXIS_NAMES[:n_axes]:
+            raise ConfigurationError.out_of_range("tool path axis", name,
+                                                  f"an engine axis ({', '.join(AXIS_NAMES[:n_axes])})")
     builder = _Builder(toolpath, list(axes), settings, max_pulses_per_slot, n_axes)
     for step in toolpath.steps:
         if isinstance(step, Line):
@@ -180,6 +203,9 @@ def plan_toolpath(toolpath: Toolpath, axes: Sequence[HostAxis], *, settings: Pat
             builder.counts.extend([(0,) * n_axes] * slots)
         elif isinstance(step, PathControl):
             builder.path_control(step)
+        elif isinstance(step, Wait):
+            raise ConfigurationError(f"{toolpath.source}:{step.line}: a tool path that waits on {step.input} is "
+                                     "planned piece by piece, as it runs (cosim.controllers.pokeys.gcodejob)")
         else:
             builder.flush()
             builder.outputs.append((len(builder.counts), step))
@@ -198,8 +224,12 @@ class _Builder:
         self.axes = axes
         self.settings = settings
         self.n_axes = n_axes
-        self.position: Point = toolpath.start
-        self.steps = [a.steps(p) for a, p in zip(axes, toolpath.start, strict=True)]
+        self.names = toolpath.axes
+        self.position: Point = (*toolpath.start, *(Fraction(0),) * (len(axes) - len(toolpath.start)))
+        self.steps = [a.steps(p) for a, p in zip(axes, self.position, strict=True)]
+        self.engine = [AXIS_NAMES.index(name) for name in self.names]  # engine axis of each tool path axis
+        self.plain = self.engine == list(range(len(axes)))  # the first axes of the engine, in order
+        self.groups = {g: [i for i, name in enumerate(self.names) if name in g] for g in (*LINEAR_GROUPS, "abc")}
         self.spu = [a.spu for a in axes]
         per_slot = [a.spu * positive(a.max_velocity, "max_velocity") / SLOTS_PER_S for a in axes]
         self.engine_bound = [v > limit for v in per_slot]
@@ -218,6 +248,7 @@ class _Builder:
         self.exact_path = False
         self.chain: list[tuple[Segment, tuple[float, ...]]] = []
         self.corner_modes: list[tuple[bool, bool, float]] = []
+        self.along: list[int] | None = None  # the feed axes of the last segment
         self.counts: list[Counts] = []
         self.notes: dict[int, str] = {}
         self.outputs: list[tuple[int, Spindle | Output | Message]] = []
@@ -232,8 +263,9 @@ class _Builder:
 
     # -- geometry --------------------------------------------------------------------------------
     def line(self, end: Point, feed: Fraction | None, line: int) -> None:
+        group = feed_axes(self.position, end, self.names)
         self.position = end
-        self.segment([a.steps(p) for a, p in zip(self.axes, end, strict=True)], feed, line)
+        self.segment([a.steps(p) for a, p in zip(self.axes, end, strict=True)], feed, line, group or "xyz")
 
     def arc(self, arc: Arc) -> None:
         i, j, k = {"xy": (0, 1, 2), "zx": (2, 0, 1), "yz": (1, 2, 0)}[arc.plane]
@@ -251,26 +283,31 @@ class _Builder:
         n = max(1, math.ceil(sweep / step))
         sign = -1 if arc.clockwise else 1
         z0, z1 = float(start[k]), float(end[k])
+        others = [(float(a), float(b)) for a, b in zip(start[3:], end[3:], strict=True)]  # linear with the angle
         for step in range(1, n):
             f = step / n
             angle, radius = a0 + sign * sweep * f, r0 + (r1 - r0) * f
             on_plane = [0.0, 0.0, 0.0]
             on_plane[i], on_plane[j], on_plane[k] = (cx + radius * math.cos(angle), cy + radius * math.sin(angle),
                                                      z0 + (z1 - z0) * f)
-            point = tuple(on_plane)
+            point = (*on_plane, *(a + (b - a) * f for a, b in others))
             self.segment([a.steps(Fraction(p)) for a, p in zip(self.axes, point, strict=True)], arc.feed, arc.line)
         self.line(end, arc.feed, arc.line)
 
     # -- one segment -----------------------------------------------------------------------------
-    def segment(self, target: list[int], feed: Fraction | None, line: int) -> None:
+    def segment(self, target: list[int], feed: Fraction | None, line: int, group: str = "xyz") -> None:
         deltas = [t - s for t, s in zip(target, self.steps, strict=True)]
         if not any(deltas):
             return
         # Exact integer arithmetic throughout (as Fractions would give it, at a tenth of the cost):
-        # axis a moves units[a] / den units; the length is the ceiling of the XYZ length in quanta.
+        # axis a moves units[a] / den units; the length is the ceiling of the length along the feed axes
+        # (XYZ; see feed_axes) in quanta, or of the next group that moves in whole steps.
         den = self.unit_den
         units = [d * f for d, f in zip(deltas, self.unit_factor, strict=True)]
-        square = sum(u * u for u in units) * QUANTA_PER_UNIT**2  # the length^2 in quanta, times den^2
+        along = self.groups[group]
+        if not any(units[a] for a in along):
+            along = next(g for g in self.groups.values() if any(units[a] for a in g))
+        square = sum(units[a] * units[a] for a in along) * QUANTA_PER_UNIT**2  # the length^2 in quanta, times den^2
         length = isqrt(square // (den * den))
         length += length * length * den * den < square
         moving = [(a, abs(d)) for a, d in enumerate(deltas) if d]
@@ -290,30 +327,45 @@ class _Builder:
                 known = self.wanted[feed] = (wanted, wanted.numerator, wanted.denominator)
             wanted, p, q = known
             if p * best_d > best_n * q:  # wanted > best_n / best_d: the axes slow the feed
-                self.note(line, wanted, (Fraction(best_n, best_d), best), length, deltas)
+                self.note(line, wanted, (Fraction(best_n, best_d), best), length, deltas,
+                          rotary=along == self.groups["abc"])
             vmax = min(vmax, p // q)
         vmax = max(1, vmax)
         direction = tuple(u / den for u in units)  # correctly rounded, as float(Fraction(u, den))
         norm = math.sqrt(sum(u * u for u in direction))
-        start = (*self.steps, *([0] * (self.n_axes - 3)))
+        start, end = self._engine_counts(self.steps), self._engine_counts(target)
         self.steps = target
-        end = (*target, *([0] * (self.n_axes - 3)))
         self.chain.append((Segment(start, end, length, vmax, accel, accel), tuple(u / norm for u in direction)))
-        self.corner_modes.append((self.blend, self.exact_path, self.deviation))
+        # path speeds along different feed axes (mm along XYZ, degrees along ABC) do not meet: a stop between them
+        same = self.along in (None, along)
+        self.along = along
+        self.corner_modes.append((self.blend and same, self.exact_path and same, self.deviation))
         self.n_segments += 1
 
-    def note(self, line: int, wanted: Fraction, bound: tuple[Fraction, int], length: int, deltas: list[int]) -> None:
+    def _engine_counts(self, steps: list[int]) -> tuple[int, ...]:
+        """Steps of the tool path's axes as a point of the engine's axes (0 on the others)."""
+        if self.plain:
+            return (*steps, *([0] * (self.n_axes - len(steps))))
+        out = [0] * self.n_axes
+        for index, value in zip(self.engine, steps, strict=True):
+            out[index] = value
+        return tuple(out)
+
+    def note(self, line: int, wanted: Fraction, bound: tuple[Fraction, int], length: int, deltas: list[int], *,
+             rotary: bool = False) -> None:
         if line in self.notes:
             return
         a = bound[1]
         name = self.axes[a].name
         per_min = 60 * SLOTS_PER_S
         rate = wanted * abs(deltas[a]) / length * SLOTS_PER_S
+        units = "deg" if rotary else self.settings.units  # of the feed
+        axis_units = "deg" if self.names[a] in "abc" else self.settings.units
         why = (f"the engine's {self.vlim[a]} pulses per slot" if self.engine_bound[a]
-               else f"its max_velocity {float(self.vlim[a] * SLOTS_PER_S / self.spu[a]):g} {self.settings.units}/s")
+               else f"its max_velocity {float(self.vlim[a] * SLOTS_PER_S / self.spu[a]):g} {axis_units}/s")
         self.notes[line] = (f"{self.source}:{line}: feed {float(wanted * per_min / QUANTA_PER_UNIT):g} "
-                            f"{self.settings.units}/min needs {float(rate):.0f} pulses/s on {name}, more than {why}: "
-                            f"slowed to {float(bound[0] * per_min / QUANTA_PER_UNIT):g} {self.settings.units}/min")
+                            f"{units}/min needs {float(rate):.0f} pulses/s on {name}, more than {why}: "
+                            f"slowed to {float(bound[0] * per_min / QUANTA_PER_UNIT):g} {units}/min")
 
     # -- chains ----------------------------------------------------------------------------------
     def flush(self) -> None:

@@ -120,13 +120,14 @@ def plan(steps: Iterable[Move | Dwell], axes: Sequence[AxisConfig], *,
     return out
 
 
-def to_entries(counts: Iterable[Sequence[int]]) -> list[Entry]:
-    """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit."""
+def to_entries(counts: Iterable[Sequence[int]], *, direction_bits: Sequence[bool] | None = None) -> list[Entry]:
+    """Slot entries for per-slot counts; a zero count keeps the axis' previous direction bit (``direction_bits``:
+    the bits before the first slot, default all clear)."""
     entries = []
     encoded: dict[tuple[tuple[int, ...], tuple[bool, ...]], Entry] = {}  # equal entries: one object, encoded once
     # (counts, direction bits before) -> (entry, direction bits after): a job repeats few slots many times
     after: dict[tuple[tuple[int, ...], tuple[bool, ...]], tuple[Entry, tuple[bool, ...]]] = {}
-    negative: tuple[bool, ...] | None = None
+    negative: tuple[bool, ...] | None = tuple(direction_bits) if direction_bits is not None else None
     for slot in counts:
         counts_ = slot if isinstance(slot, tuple) else tuple(slot)
         if negative is None:

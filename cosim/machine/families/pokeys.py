@@ -7,13 +7,17 @@
     model = "56E"                 # 56E, 56U, 57E, 57CNC
     dir_setup = "5 us"            # direction set-up before the first pulse of a slot
     pulse_width = "5 us"
-    [controller.axis.x]           # x, y, z (the 57CNC: up to 8 axes)
+    [controller.axis.x]           # x, y, z (the 57CNC: x, y, z, a, b, c, u, v)
     max_speed_hz = 24000          # the engine's own limits (internal modes); default from the host's below
     accel = 400000                # pulses/s^2 (decel defaults to accel)
     limit_pos_enabled = true
     steps_per_unit = 400          # the host's motor tuning, for G-code programs
     max_velocity = 50             # units/s
     max_accel = 500               # units/s^2
+    [controller.axis.a]           # a 57CNC's a, b, c (degrees) and u, v (units): G-code axes when tuned
+    steps_per_unit = 100          # steps/degree
+    max_velocity = 90             # degrees/s
+    max_accel = 900               # degrees/s^2
 
     [host]
     link = "usb"                  # usb or ethernet
@@ -27,8 +31,11 @@
     subroutine_path = ["subs"]    # folders of o<name> subroutine files (name.ngc), from the machine file
     tool_change_time = "4 s"      # how long an M6 takes (the job waits)
     tool_change_position = [0, 0, 50]  # machine coordinates the machine goes to for M6 (default: stays)
-    pause_time = "2 s"            # how long an M0/M60 (M1 with optional_stop) pause lasts
+    pause_time = "2 s"            # how long an M0/M60 (M1 with optional_stop) pause lasts, or
+    cycle_start = true            # ... until <engine>.cycle_start rises (a [[stimulus]], the operator)
     optional_stop = false         # M1 pauses
+    digital_inputs = 4            # M66 P0..P3 read <engine>.din0..din3, analog_inputs = 4: E0..E3 ain0..ain3
+                                  #   (an input a [[stimulus]] drives; one none drives reads 0)
     probe = false                 # the machine has a probe input (G38.n; the probe never trips)
     block_delete = false          # lines starting with / are skipped
     [[host.tool]]                 # the tool table (T, M6, G43, G41/G42, #5400..)
@@ -54,18 +61,23 @@ from pathlib import Path
 from typing import Any
 
 from cosim.controllers.pokeys import AxisConfig, EngineConfig, PulseEngine
-from cosim.controllers.pokeys.gcode import UNITS, HostSetup, Tool, canonical, read_file, toolpath
+from cosim.controllers.pokeys.buffer import Entry
+from cosim.controllers.pokeys.gcode import UNITS, HostSetup, Interpreter, Tool, read_file
+from cosim.controllers.pokeys.gcodejob import GcodeJob, Piece
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.job import JobWatch
 from cosim.controllers.pokeys.limits import AXIS_NAMES
-from cosim.controllers.pokeys.pathplan import MODES, HostAxis, PathSettings, PlannedJob, plan_toolpath
+from cosim.controllers.pokeys.models import MODELS
+from cosim.controllers.pokeys.pathplan import MODES, HostAxis, PathSettings
 from cosim.controllers.pokeys.planner import Move, plan, to_entries
 from cosim.controllers.pokeys.states import EngineState
+from cosim.controllers.pokeys.toolpath import Wait
 from cosim.errors import ConfigurationError
 from cosim.job import Job, JobState
 from cosim.machine.document import Table
 from cosim.machine.families.pokeys_figures import declare_figures
 from cosim.scenario import Run
+from cosim.signals import Signal
 from cosim.validate import positive
 
 AXIS_KEYS = ("max_speed_hz", "accel", "decel", "limit_pos_enabled", "limit_neg_enabled", "home_enabled",
@@ -73,9 +85,19 @@ AXIS_KEYS = ("max_speed_hz", "accel", "decel", "limit_pos_enabled", "limit_neg_e
 HOST_AXIS_UNITS = {"steps_per_unit": "steps/unit", "max_velocity": "units/s", "max_accel": "units/s^2"}
 HOST_AXIS_KEYS = tuple(HOST_AXIS_UNITS)
 GCODE_AXES = ("x", "y", "z")
+"""The axes every G-code machine tunes; the model's other axes (a 57CNC's a, b, c, u, v) join when tuned."""
+GCODE_LETTERS = "ABCUVW"
+"""Axis words beyond X, Y, Z (LinuxCNC's)."""
 GCODE_KEYS = ("units", "feed_override", "path_mode", "path_tolerance", "arc_tolerance", "allow_unsupported",
               "subroutine_path", "tool_change_time", "tool_change_position", "pause_time", "optional_stop", "probe",
-              "block_delete", "tool")
+              "block_delete", "tool", "cycle_start", "digital_inputs", "analog_inputs")
+DEFAULT_INPUTS = 4
+"""M66's digital and analog inputs by default (LinuxCNC's motion module: num_dio = num_aio = 4)."""
+MAX_INPUTS = 64
+"""The most of either (LinuxCNC's EMCMOT_MAX_DIO / EMCMOT_MAX_AIO)."""
+INPUT_DESCRIPTIONS = {"din": "digital input the host reads (G-code M66 P)",
+                      "ain": "analog input the host reads (G-code M66 E)",
+                      "cycle_start": "the operator's cycle start: its rise ends an M0/M1/M60 pause"}
 TOOL_KEYS = ("number", "diameter", "z_offset", "x_offset", "pocket")
 
 
@@ -142,37 +164,98 @@ class PoKeysFamily:
         moves = document.tables("move")
         link = host.text("link", "usb", choices=("usb", "ethernet"))
         prefill = host.integer("prefill", 64, low=1, high=controller.buffer.depth_slots)
-        job: PlannedJob | None = None
-        ending = ""
+        gjob: GcodeJob | None = None
         part = "moves"
+        first = Piece([])
+        inputs: dict[str, Signal] = {}
         if programs:
             if moves:
                 raise ConfigurationError(f"{document.file}: move: a machine runs either a G-code [[program]] or "
                                          "[[move]] tables, not both")
-            job, ending, notes = self._gcode_job(controller, programs, host, base=base)
-            counts = job.counts
+            gjob = self._gcode_job(controller, programs, host, base=base)
+            first = gjob.next_piece()
+            counts = gjob.counts
             part = str(programs[0].data.get("file"))
-            run.sim.trace.meta["gcode"] = {"file": part, "notes": list(job.notes), "skipped": list(job.skipped),
-                                           "end_steps": list(job.end_steps), "not_modelled": notes, "end": ending}
-            for note in [*job.notes, *(f"skipped: {line}" for line in job.skipped)]:
-                run.note(note)
-            for note in notes:
-                run.sim.notes.not_modelled(controller.name, "G-code", note.split(": ", 1)[-1],
-                                           where=note.split(": ", 1)[0] if ": " in note else part)
+            inputs = self._inputs(run, controller, host, document, gjob)
+            run.sim.trace.meta["gcode"] = {"file": part, "notes": gjob.notes, "skipped": gjob.skipped,
+                                           "end_steps": list(gjob.end_steps), "not_modelled": gjob.not_modelled,
+                                           "end": gjob.ending}
+            said = self._say(run, controller, gjob, part, 0, 0)
         else:
             for key in GCODE_KEYS:
                 if host.has(key):
                     raise ConfigurationError(f"{host.file}: {host.key(key)}: G-code settings need a G-code "
                                              "[[program]]")
             counts = self._move_job(controller, moves)
+        engine_job = controller.job = Job(run.sim, controller.name)  # type: ignore[attr-defined]
+        ending = (lambda: gjob.ending) if gjob is not None else (lambda: "moves")
+
+        def on_end() -> None:
+            if gjob is not None:
+                meta: dict[str, Any] = run.sim.trace.meta["gcode"]  # type: ignore[assignment]
+                meta.update(end=gjob.ending, end_steps=list(gjob.end_steps))
+            self._job_end(engine_job, part, ending(), programs)
+
+        watch = JobWatch(run.sim, controller, slots=len(counts), outputs=first.outputs, on_end=on_end,
+                         complete=first.wait is None)
+
+        def next_piece(value: float | None, index: int, bits: tuple[bool, ...]) -> tuple[list[Entry], Wait | None]:
+            """The job after a wait (see GcodeJob): its entries from ``index``, told to the job watch."""
+            nonlocal said
+            assert gjob is not None
+            try:
+                piece = gjob.next_piece(value)
+            except ConfigurationError as exc:
+                engine_job.stop(JobState.ERROR, str(exc))
+                watch.extend(index, complete=True)
+                return [], None
+            said = self._say(run, controller, gjob, part, *said)
+            entries = to_entries(piece.counts, direction_bits=bits)
+            watch.extend(index + len(entries), [(index + i, record) for i, record in piece.outputs],
+                         complete=piece.wait is None)
+            return entries, piece.wait
+
         with host.at():
-            app = HostApp(run.sim, controller, to_entries(counts), link=link, prefill_slots=prefill)
-        controller.job = Job(run.sim, controller.name)  # type: ignore[attr-defined]
-        self._follow_job(run, controller, controller.job, part, ending if programs else "moves")  # type: ignore
-        watch = JobWatch(run.sim, controller, slots=len(counts), outputs=job.outputs if job else (),
-                         on_end=lambda: self._job_end(controller.job, part, ending if programs else "moves",  # type: ignore
-                                                      programs))
-        declare_figures(run, controller, app, watch, counts, job)
+            app = HostApp(run.sim, controller, to_entries(first.counts if gjob is not None else counts), link=link,
+                          prefill_slots=prefill, wait=first.wait, next_piece=next_piece, inputs=inputs)
+        self._follow_job(run, controller, engine_job, part, ending())
+        declare_figures(run, controller, app, watch, counts, gjob)
+
+    @staticmethod
+    def _say(run: Run, controller: PulseEngine, gjob: GcodeJob, part: str, notes: int, not_modelled: int
+             ) -> tuple[int, int]:
+        """The job's notes since the last time (``notes``, ``not_modelled`` said so far) in the run's notes."""
+        for note in gjob.notes[notes:]:
+            run.note(note)
+        if not notes and not not_modelled:
+            for line in gjob.skipped:
+                run.note(f"skipped: {line}")
+        for note in gjob.not_modelled[not_modelled:]:
+            run.sim.notes.not_modelled(controller.name, "G-code", note.split(": ", 1)[-1],
+                                       where=note.split(": ", 1)[0] if ": " in note else part)
+        return len(gjob.notes), len(gjob.not_modelled)
+
+    @staticmethod
+    def _inputs(run: Run, controller: PulseEngine, host: Table, document: Table, gjob: GcodeJob
+                ) -> dict[str, Signal]:
+        """The host's inputs a ``[[stimulus]]`` drives (``<engine>.din<n>``, ``ain<n>``, ``cycle_start``), as signals;
+        an input no stimulus drives reads 0 (LinuxCNC: an unconnected motion.digital-in pin)."""
+        counts = gjob.interpreter.inputs or {}
+        names = [*(f"din{n}" for n in range(counts.get("digital", 0))),
+                 *(f"ain{n}" for n in range(counts.get("analog", 0))), "cycle_start"]
+        stimuli = document.data.get("stimulus", [])  # read, not taken: build reads them after the family starts
+        driven = {str(t.get("signal")) for t in stimuli if isinstance(t, dict)} if isinstance(stimuli, list) else set()
+        inputs = {}
+        for name in names:
+            if f"{controller.name}.{name}" in driven:
+                kind = "real" if name.startswith("ain") else "bit"
+                inputs[name] = Signal(run.sim, f"{controller.name}.{name}", kind=kind,
+                                      description=INPUT_DESCRIPTIONS[name.rstrip("0123456789")])
+                controller.host_inputs.append(inputs[name])
+        if gjob.setup.cycle_start and "cycle_start" not in inputs:
+            run.note(f"{host.file}: host.cycle_start: no [[stimulus]] drives {controller.name}.cycle_start: an M0 "
+                     "pause lasts until the run ends")
+        return inputs
 
     @staticmethod
     def _follow_job(run: Run, controller: PulseEngine, job: Job, part: str, ending: str) -> None:
@@ -206,8 +289,7 @@ class PoKeysFamily:
                 moves.append(Move(tuple(target) if isinstance(target, list) else target, speed_hz=speed, accel=accel))
         return plan(moves, controller.config.axes) if moves else []
 
-    def _gcode_job(self, controller: PulseEngine, programs: list[Table], host: Table, *,
-                   base: Path) -> tuple[PlannedJob, str, list[str]]:
+    def _gcode_job(self, controller: PulseEngine, programs: list[Table], host: Table, *, base: Path) -> GcodeJob:
         if len(programs) > 1:
             raise ConfigurationError(f"{programs[1].file}: {programs[1].path}: a PoKeys machine runs one G-code "
                                      "program (give one [[program]] table)")
@@ -222,31 +304,57 @@ class PoKeysFamily:
                                     feed_override=host.number("feed_override", Fraction(1)), units=units)
         axes = []
         assert self.axes_table is not None
-        for name in GCODE_AXES:
+        names = controller.axis_names
+        extra = tuple(name for name in names[3:] if self.host_axes.get(name))
+        for name in (*GCODE_AXES, *extra):
             values = self.host_axes.get(name, {})
             missing = [key for key in HOST_AXIS_KEYS if key not in values]
             if missing:
+                needs = (f"on the {', '.join(GCODE_AXES)} axes" if name in GCODE_AXES else
+                         f"on a G-code axis {name} ({'degrees' if name in 'abc' else 'units'})")
                 raise ConfigurationError(f"{self.axes_table.file}: {self.axes_table.key(name)}.{missing[0]} is "
-                                         f"missing (a G-code program needs {', '.join(HOST_AXIS_KEYS)} on the "
-                                         f"{', '.join(GCODE_AXES)} axes)")
+                                         f"missing (a G-code program needs {', '.join(HOST_AXIS_KEYS)} {needs})")
             with self.axes_table.at(name):
                 axes.append(HostAxis(**values, name=name))
+        no_axis = {letter: _no_axis(letter, controller, self.axes_table) for letter in GCODE_LETTERS
+                   if letter.lower() not in extra}
         with host.at():
+            cycle_start = host.flag("cycle_start", False)
+            if cycle_start and host.has("pause_time"):
+                raise ConfigurationError(f"{host.file}: {host.key('pause_time')}: a pause ends after pause_time or "
+                                         "at cycle_start, not both (give one)")
             setup = HostSetup(units=units, tool_change_time=_seconds(host, "tool_change_time"),
                               tool_change_position=_position(host), pause_time=_seconds(host, "pause_time"),
                               optional_stop=host.flag("optional_stop", False),
-                              arc_tolerance=host.number("arc_tolerance", Fraction(1, 100)))
+                              arc_tolerance=host.number("arc_tolerance", Fraction(1, 100)),
+                              axes="".join((*GCODE_AXES, *extra)), cycle_start=cycle_start, inputs=True)
             tools = _tools(host)
             search = [(base / str(p)).resolve() for p in _list(host, "subroutine_path")]
             probe = host.flag("probe", False)
             block_delete = host.flag("block_delete", False)
+            inputs = {"digital": host.integer("digital_inputs", DEFAULT_INPUTS, low=0, high=MAX_INPUTS),
+                      "analog": host.integer("analog_inputs", DEFAULT_INPUTS, low=0, high=MAX_INPUTS)}
         with table.at("file"):
-            program = canonical(read_file(path), units=units, tools=tools, search_path=search,
-                                allow_unsupported=allow, probe=probe, axes="xyz", block_delete=block_delete)
-            path_ = toolpath(program, setup)
-        job = plan_toolpath(path_, axes, settings=settings, n_axes=len(controller.axis_names),
+            interpreter = Interpreter(machine_units=units, tools=tools, search_path=search,
+                                      allow_unsupported=allow, probe=probe, axes="".join((*GCODE_AXES, *extra)),
+                                      no_axis=no_axis, block_delete=block_delete, inputs=inputs)
+            return GcodeJob(interpreter, read_file(path), setup, axes, settings=settings,
+                            n_axes=len(controller.axis_names),
                             max_pulses_per_slot=controller.device.max_pulses_per_slot)
-        return job, path_.ending, list(path_.notes)
+
+
+def _no_axis(letter: str, controller: PulseEngine, axes: Table) -> str:
+    """Why a G-code axis word cannot run on this machine: the model has not got the axis, or the file does not
+    tune it."""
+    device = controller.device
+    name = letter.lower()
+    if name not in device.axis_names:
+        most = max(MODELS.values(), key=lambda m: m.axes)
+        hint = f"; a PoKeys{most.name} drives {', '.join(most.axis_names)}" if name in most.axis_names else ""
+        return (f"a PoKeys{device.name} has no {letter} axis (its pulse engine drives {device.axes} axes: "
+                f"{', '.join(device.axis_names)}{hint})")
+    return (f"the {letter} axis of this PoKeys{device.name} is not a G-code axis: give "
+            f"{', '.join(HOST_AXIS_KEYS)} in {axes.file}: [{axes.key(name)}]")
 
 
 def _seconds(host: Table, key: str) -> Fraction:

@@ -26,6 +26,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from cosim.controllers.pokeys import PulseEngine
+from cosim.controllers.pokeys.gcodejob import GcodeJob
 from cosim.controllers.pokeys.host import HostApp
 from cosim.controllers.pokeys.job import JobWatch
 from cosim.controllers.pokeys.limits import SLOTS_PER_S
@@ -37,16 +38,17 @@ LOST_STEPS = "lost_full_steps"
 
 
 def declare_figures(run: Run, engine: PulseEngine, host: HostApp, watch: JobWatch, counts: Sequence[Sequence[int]],
-                    job: PlannedJob | None) -> None:
-    """Declare the job figures of the module docstring on ``run``."""
+                    job: PlannedJob | GcodeJob | None) -> None:
+    """Declare the job figures of the module docstring on ``run`` (``counts`` and ``job`` may grow as the job runs:
+    a G-code job with waits; ``slots`` counts the idle slots of its waits too)."""
     sim = run.sim
     trace = sim.trace
     ms = sim.ticks(1, "ms")
     nan = float("nan")
-    run.figure("slots", len(counts))
-    run.figure("pulses", sum(abs(c) for slot in counts for c in slot))
+    run.figure("slots", lambda: len(host.entries))
+    run.figure("pulses", lambda: sum(abs(c) for slot in counts for c in slot))
     run.figure("fill_commands", lambda: len(host.fills))
-    run.figure("job_done_ms", lambda: (host.t_buffer_mode or 0) / ms + len(counts), "ms")
+    run.figure("job_done_ms", lambda: (host.t_buffer_mode or 0) / ms + len(host.entries), "ms")
     run.figure("job_duration_s", lambda: nan if watch.job_ticks is None else sim.timebase.seconds(watch.job_ticks),
                "s")
     limit = engine.device.max_pulses_per_slot
@@ -75,8 +77,8 @@ def declare_figures(run: Run, engine: PulseEngine, host: HostApp, watch: JobWatc
     run.figure("first_underrun_ms", lambda: engine.underruns[0].t_start / ms if engine.underruns else nan, "ms")
     run.figure("first_underrun_slots", lambda: engine.underruns[0].slots if engine.underruns else 0, "slots")
     if job is not None:
-        run.figure("slowed_lines", len(job.notes))
-        run.figure("skipped_lines", len(job.skipped))
+        run.figure("slowed_lines", lambda: len(job.notes))
+        run.figure("skipped_lines", lambda: len(job.skipped))
     steppers = [p for p in run.plants if LOST_STEPS in p.variable_names()]
     for plant in steppers:
         run.figure(f"{plant.name}_lost_steps", lambda plant=plant: abs(float(plant.read(LOST_STEPS))),  # type: ignore[misc]

@@ -17,7 +17,7 @@ and the construct: ``pocket.nc:12:4: G38.2 needs a probe input: add probe = true
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
 
@@ -34,12 +34,19 @@ UNITS = ("mm", "inch")
 
 def canonical(source: SourceFile, *, units: str = "mm", tools: Sequence[Tool] = (),
               search_path: Sequence[str | Path] = (), allow_unsupported: bool = False, probe: bool = False,
-              axes: str = "xyzabc", block_delete: bool = False) -> CanonProgram:
-    """The canonical program of a parsed file on a machine in ``units`` (``ConfigurationError`` if refused)."""
+              axes: str = "xyzabc", block_delete: bool = False, no_axis: Mapping[str, str] | None = None
+              ) -> CanonProgram:
+    """The canonical program of a parsed file on a machine in ``units`` (``ConfigurationError`` if refused).
+
+    ``axes`` are the axis letters the machine has; a word of another axis is refused with
+    ``no_axis[letter]`` as the reason (what the machine lacks: the model has not got the axis, or
+    the machine file does not tune it).
+    """
     if units not in UNITS:
         raise ConfigurationError.out_of_range("units", units, ", ".join(UNITS))
     interp = Interpreter(machine_units=units, tools=tools, search_path=search_path,
-                         allow_unsupported=allow_unsupported, probe=probe, axes=axes, block_delete=block_delete)
+                         allow_unsupported=allow_unsupported, probe=probe, axes=axes, block_delete=block_delete,
+                         no_axis=no_axis)
     try:
         return interp.run(source)
     except ProgramError as exc:

@@ -27,8 +27,10 @@ call                                    arguments
 ``SET_SPINDLE_SPEED``                   rev/min (or surface speed under G96)
 ``START_SPINDLE_CLOCKWISE``,            (none)
 ``START_SPINDLE_COUNTERCLOCKWISE``,
-``STOP_SPINDLE_TURNING``,
-``ORIENT_SPINDLE``
+``STOP_SPINDLE_TURNING``
+``ORIENT_SPINDLE``                      spindle, angle [degrees] (M19 R), mode (M19 P: 0 shortest, 1
+                                        clockwise, 2 counter-clockwise; G87: the spindle's direction)
+``WAIT_ORIENT_COMPLETE``                spindle, timeout [s] (M19 Q)
 ``FLOOD_ON`` ``FLOOD_OFF`` ``MIST_ON``  (none)
 ``MIST_OFF``
 ``SET_MOTION_CONTROL_MODE``             ``EXACT_STOP`` (G61.1), ``EXACT_PATH`` (G61), ``CONTINUOUS``

@@ -7,6 +7,18 @@ to R, runs the cycle's body and retracts to the clearance height: the initial he
 ``G98`` (if above R), R under ``G99``. Under ``G91`` R is measured from the initial height and Z
 from R. ``G83`` retracts to R between pecks and rapids back to 0.254 mm (0.010 in) above the
 last depth; ``G73`` backs off 0.254 mm (0.010 in) only.
+
+``G87`` (back boring) and ``G88`` (boring, spindle stop, manual retract) are documented by
+LinuxCNC 2.9 as "accepted, behaviour undefined"; they run here as its ``rs274`` runs them.
+``G87``: from R over the hole, the tool moves to the offset point (the plane's offset words, ``I
+J`` in G17, relative to the hole), the spindle stops and is oriented, the tool goes down to the
+bottom there and back over the hole, the spindle starts, the cut is fed up to the back-bore height
+(the depth axis' offset word, ``K`` in G17; from the bottom under ``G91``) and down to the bottom
+again, the spindle stops and is oriented, the tool returns to the offset point and rises there to
+the clearance height, comes back over the hole and the spindle starts. ``G88``: feed to the bottom,
+dwell ``P``, stop the spindle, program stop (the operator retracts by hand: the next move starts
+from the bottom), restart the spindle. ``G74``, ``G84``, ``G86``-``G88`` need the spindle turning
+(``G74`` counter-clockwise, ``G84`` clockwise), as LinuxCNC checks.
 """
 
 from __future__ import annotations
@@ -22,6 +34,10 @@ if TYPE_CHECKING:
 
 #: plane -> (first axis, second axis, the cycle's depth axis) indices in x..w
 CYCLE_AXES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
+#: plane -> G87's offset words of the plane's first and second axes
+OFFSET_LETTERS = {170: ("I", "J"), 180: ("K", "I"), 190: ("J", "K")}
+#: direction of the spindle (1 clockwise, -1 counter-clockwise) -> ORIENT_SPINDLE's mode (CANON_CLOCKWISE 2, ..)
+ORIENT_MODE = {1: 2, -1: 3}
 PECK_CLEARANCE_INCH = 0.010
 
 
@@ -35,7 +51,7 @@ def cycle(interp: Interpreter, w: Words, code: int) -> None:
     first, second, depth = CYCLE_AXES[s.plane]
     letters = "XYZABCUVW"
     values = s.cycle_values
-    for letter in "RPQ":
+    for letter in "RPQIJK" if code == 870 else "RPQ":
         if w.has(letter):
             values[letter] = w.values[letter]
     depth_letter = letters[depth]
@@ -52,6 +68,8 @@ def cycle(interp: Interpreter, w: Words, code: int) -> None:
         n = integer(w.values["L"])
         if n is None or n < 0:
             raise WordError(f"{name} L{show(w.values['L'])}: L (repeats) must be a whole number >= 0", w.column("L"))
+        if n == 0:
+            raise WordError("Cannot do zero repeats of cycle", w.column("L"))
         repeats = n
     if code in (730, 830):
         q = values.get("Q")
@@ -59,9 +77,11 @@ def cycle(interp: Interpreter, w: Words, code: int) -> None:
             raise WordError(f"Q word missing or not positive with {name} (the peck depth)", w.g_columns.get(1, 0))
     if code in (820, 860, 880, 890, 740, 840) and values.get("P", 0) < 0:
         raise WordError(f"{name} P{show(values['P'])}: the dwell is >= 0 s", w.column("P"))
-    if code in (870, 880):
-        raise WordError(f"{name} ({'back boring' if code == 870 else 'boring with a manual retract'}) is not "
-                        "supported", w.g_columns.get(1, 0))
+    _spindle_check(interp, w, code, name)
+    if code == 870:
+        for letter in "IJK":
+            if letter not in values:
+                raise WordError(f"{letter} word missing with {name.lower()}", w.g_columns.get(1, 0))
     pos = list(s.position)
     old_cc = pos[depth]
     initial = s.cycle_old_z
@@ -104,7 +124,10 @@ def cycle(interp: Interpreter, w: Words, code: int) -> None:
         if cc != r:
             pos[depth] = r
             interp.emit("STRAIGHT_TRAVERSE", *pos)
-        _body(interp, code, pos, depth, r, bottom, clear, values)
+        if code == 870:
+            _back_bore(interp, values, pos, (first, second, depth), bottom, clear)
+        else:
+            _body(interp, code, pos, depth, r, bottom, clear, values)
         pos[depth] = clear
         cc = clear
     s.position = tuple(pos)
@@ -149,6 +172,14 @@ def _body(interp: Interpreter, code: int, pos: list[Number], depth: int, r: Numb
         feed(r)
         if clear != r:
             rapid(clear)
+    elif code == 880:
+        feed(bottom)
+        interp.emit("DWELL", values.get("P", 0))
+        interp.emit("STOP_SPINDLE_TURNING", 0)
+        interp.emit("PROGRAM_STOP")
+        _spindle_back(interp)
+        interp.note("G88 (boring, manual retract): the operator's retract is not simulated; the move after the "
+                    "pause starts from the bottom of the hole")
     elif code == 860:
         feed(bottom)
         interp.emit("DWELL", values.get("P", 0))
@@ -171,6 +202,52 @@ def _body(interp: Interpreter, code: int, pos: list[Number], depth: int, r: Numb
             rapid(clear)
         interp.note(f"{'G84' if code == 840 else 'G74'} (tapping): the spindle reversal is signalled; the feed is "
                     "not synchronised with the spindle")
+
+
+def _spindle_check(interp: Interpreter, w: Words, code: int, name: str) -> None:
+    """LinuxCNC's errors for the cycles that need the spindle turning (its messages, its spelling)."""
+    spindle = interp.state.spindle
+    column = w.g_columns.get(1, 0)
+    if code in (740, 840, 860, 870, 880) and spindle == 0:
+        raise WordError(f"Spindle not turning in {name if code in (740, 840) else name.lower()}", column)
+    if code == 740 and spindle == 1:
+        raise WordError("Spindle turning clockwise in G74", column)
+    if code == 840 and spindle == -1:
+        raise WordError("Spindle turning counterclockwise in G84", column)
+
+
+def _back_bore(interp: Interpreter, values: dict[str, Number], pos: list[Number], axes: tuple[int, int, int],
+               bottom: Number, clear: Number) -> None:
+    """G87 from R over the hole, as rs274 runs it (see the module text)."""
+    s = interp.state
+    first, second, depth = axes
+    letter1, letter2 = OFFSET_LETTERS[s.plane]
+    height = values["IJK"[depth]]
+    top = bottom + height if s.incremental else height
+    hole = (pos[first], pos[second])
+    offset = (hole[0] + values[letter1], hole[1] + values[letter2])
+    start = "START_SPINDLE_CLOCKWISE" if s.spindle == 1 else "START_SPINDLE_COUNTERCLOCKWISE"
+
+    def go(name: str, at: tuple[Number, Number], z: Number) -> None:
+        pos[first], pos[second], pos[depth] = at[0], at[1], z
+        interp.emit(name, *pos)
+
+    def stop_and_orient() -> None:
+        interp.emit("STOP_SPINDLE_TURNING", 0)
+        interp.emit("ORIENT_SPINDLE", 0, 0, ORIENT_MODE[s.spindle])
+
+    go("STRAIGHT_TRAVERSE", offset, pos[depth])
+    stop_and_orient()
+    go("STRAIGHT_TRAVERSE", offset, bottom)
+    go("STRAIGHT_TRAVERSE", hole, bottom)
+    interp.emit(start, 0)
+    go("STRAIGHT_FEED", hole, top)
+    go("STRAIGHT_FEED", hole, bottom)
+    stop_and_orient()
+    go("STRAIGHT_TRAVERSE", offset, bottom)
+    go("STRAIGHT_TRAVERSE", offset, clear)
+    go("STRAIGHT_TRAVERSE", hole, clear)
+    interp.emit(start, 0)
 
 
 def _spindle_back(interp: Interpreter) -> None:

@@ -67,7 +67,7 @@ def block(interp: Interpreter, w: Words) -> None:
             s.spindle = 0
             interp.emit("STOP_SPINDLE_TURNING", 0)
         else:
-            interp.emit("ORIENT_SPINDLE", 0, w.get("R") or 0, int(w.get("Q") or 0))
+            _orient(interp, w)
     if 11 in m:
         _state_save(interp, m[11])
     if 8 in m:
@@ -169,7 +169,7 @@ def _motion(interp: Interpreter, w: Words, machine: bool) -> None:
 
 
 def _io(interp: Interpreter, w: Words, code: int) -> None:
-    p, e, q, l_ = w.get("P"), w.get("E"), w.get("Q"), w.get("L")
+    p, e, q = w.get("P"), w.get("E"), w.get("Q")
     if code in (62, 63, 64, 65):
         n = integer(p) if p is not None else None
         if n is None or n < 0:
@@ -183,18 +183,61 @@ def _io(interp: Interpreter, w: Words, code: int) -> None:
             raise WordError(f"M{code} needs E, the analog output number, and Q, its value", w.m_columns[5])
         interp.emit("SET_MOTION_OUTPUT_VALUE" if code == 67 else "SET_AUX_OUTPUT_VALUE", n, q)
     else:  # M66
-        if (p is None) == (e is None):
-            raise WordError("M66 needs one of P (digital input) or E (analog input)", w.m_columns[5])
-        mode = integer(l_) if l_ is not None else 0
-        if mode is None or not 0 <= mode <= 4:
-            raise WordError(f"M66 L{show(l_ or 0)}: the wait type is 0..4", w.m_columns[5])
-        if e is not None and mode != 0:
-            raise WordError("M66 with an analog input (E) only takes L0", w.m_columns[5])
-        timeout = q if q is not None else 0
-        if mode != 0 and timeout <= 0:
-            raise WordError("M66 with L1..L4 needs Q, a timeout > 0 s", w.m_columns[5])
-        interp.emit("WAIT", integer(p if p is not None else e), 1 if p is not None else 0, mode, timeout)
-        interp.params.numbered[5399] = -1 if mode else 0
+        _wait(interp, w)
+
+
+def _wait(interp: Interpreter, w: Words) -> None:
+    """M66 P- | E- L- Q-, with LinuxCNC's checks and messages (rs274 2.9's wording)."""
+    p, e, q, l_ = w.get("P"), w.get("E"), w.get("Q"), w.get("L")
+    column = w.m_columns[5]
+    if p is not None and e is not None:
+        raise WordError("Invalid to select both a digital and an analog input with M66", column)
+    number = p if p is not None else e
+    if number is None or number < 0:
+        raise WordError("Need to have either a valid P or a valid E word with M66", column)
+    index = integer(number)
+    if index is None:
+        raise WordError(f"M66 {'P' if p is not None else 'E'}{show(number)}: the input number is a whole number",
+                        column)
+    mode = integer(l_) if l_ is not None else 0
+    if mode is None or not 0 <= mode <= 4:
+        raise WordError(f"M66 L{show(l_ or 0)}: the wait type is 0 (immediate), 1 (rise), 2 (fall), 3 (high) or "
+                        "4 (low)", w.column("L"))
+    if e is not None and mode != 0:
+        raise WordError("Can't select analog input with wait type != immediate return", column)
+    timeout = q if q is not None and mode != 0 else 0
+    if mode != 0 and timeout <= 0:
+        raise WordError("Zero timeout with wait type != immediate return", column)
+    digital = p is not None
+    if interp.inputs is not None:
+        kind = "digital" if digital else "analog"
+        count = interp.inputs[kind]
+        if index >= count:
+            have = f"{kind} inputs 0..{count - 1}" if count else f"no {kind} inputs"
+            raise WordError(f"M66 {'P' if digital else 'E'}{index}: the machine has {have} (host.{kind}_inputs = "
+                            f"{count} in the machine file; a [[stimulus]] drives each)", column)
+    interp.emit("WAIT", index, 1 if digital else 0, mode, timeout)
+    if interp.inputs is not None:
+        interp.suspended = True  # #5399 is the input as read when the motion before has ended: run() returns
+    else:
+        interp.params.numbered[5399] = 0  # as rs274 without a machine: its inputs read 0
+
+
+def _orient(interp: Interpreter, w: Words) -> None:
+    """M19 R- Q- P-: ORIENT_SPINDLE(0, R, P) when R or P is given, WAIT_ORIENT_COMPLETE(Q) when Q is (rs274 2.9)."""
+    r, p, q = w.get("R"), w.get("P"), w.get("Q")
+    column = w.m_columns[7]
+    if r is not None and not 0 <= r <= 360:
+        raise WordError("R value must be within 0..360 with M19", column)
+    if p is not None and p not in (0, 1, 2):
+        raise WordError("P value must be 0,1,or 2 with M19", column)
+    if r is not None or p is not None:
+        interp.emit("ORIENT_SPINDLE", 0, r if r is not None else 0, int(p or 0))
+        interp.note("M19 (orient spindle) is signalled; the spindle's angle is not modelled")
+    if q is not None:
+        if q <= 0:
+            raise WordError("Q word with M19 requires a value > 0", column)
+        interp.emit("WAIT_ORIENT_COMPLETE", 0, q)
 
 
 def _tool_change(interp: Interpreter, w: Words, code: int) -> None:
@@ -277,8 +320,8 @@ def _path_control(interp: Interpreter, w: Words, code: int) -> None:
     else:
         p = w.get("P")
         q = w.get("Q")
-        if p is not None and p < 0:
-            raise WordError(f"G64 P{show(p)}: the blending tolerance is >= 0", w.column("P"))
+        p = p if p is not None and p >= 0 else None  # rs274: a negative P or Q is as none (CONTINUOUS, 0)
+        q = q if q is not None and q >= 0 else None
         s.path_p = p if p is not None else 0
         s.path_q = q if q is not None else s.path_p
         interp.emit("SET_MOTION_CONTROL_MODE", "CONTINUOUS", s.path_p)

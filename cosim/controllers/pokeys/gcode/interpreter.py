@@ -14,7 +14,7 @@ motion (``G33``, ``G33.1``, ``G76``), probing without a probe input (``G38.n``) 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -56,6 +56,15 @@ class Interpreter:
         The machine has a probe input (G38.n runs as a feed move that does not touch).
     axes : str
         The axis letters the machine has (lower case); a word for another axis is refused.
+    inputs : mapping of str to int, optional
+        The machine's inputs for M66, ``{"digital": n, "analog": m}`` (numbers 0..n-1, 0..m-1). With
+        them the interpreter runs *live*: :meth:`run` returns after each M66 line
+        (:attr:`suspended`, as LinuxCNC's interpreter waits for the input's value) and
+        :meth:`resume` goes on with ``#5399`` set. Without them (default) an M66 reads 0 at once,
+        as rs274 without a machine does.
+    no_axis : mapping of str to str
+        Why the machine has not got an axis, by its letter (``"A"``), for the refusal of its word
+        (default: "the machine has no A axis").
     block_delete : bool
         Lines starting with ``/`` are skipped.
     max_lines : int
@@ -65,13 +74,18 @@ class Interpreter:
     def __init__(self, *, machine_units: str = "mm", units: str | None = None, tools: Sequence[Tool] = (),
                  search_path: Sequence[str | Path] = (), allow_unsupported: bool = False, probe: bool = False,
                  axes: str = "xyzabc", block_delete: bool = False, max_lines: int = 5_000_000,
-                 max_calls: int = 5_000_000) -> None:
+                 max_calls: int = 5_000_000, no_axis: Mapping[str, str] | None = None,
+                 inputs: Mapping[str, int] | None = None) -> None:
         self.machine_units = machine_units
         self.tools = {t.number: t for t in tools}
         self.library = Library(search_path)
         self.allow_unsupported = allow_unsupported
         self.probe = probe
         self.axes = axes.upper()
+        self.no_axis = dict(no_axis or {})
+        self.inputs = dict(inputs) if inputs is not None else None
+        self.suspended = False
+        self.executed = 0
         self.block_delete = block_delete
         self.max_lines = max_lines
         self.max_calls = max_calls
@@ -137,10 +151,22 @@ class Interpreter:
 
     # -- running -----------------------------------------------------------------------------------
     def run(self, main: SourceFile) -> CanonProgram:
-        """Run ``main`` to its end; the canonical program (raises ``ProgramError``)."""
+        """Run ``main`` to its end (or, live, to the first M66); the canonical program (raises ``ProgramError``)."""
         self.program = CanonProgram(main.path)
         self.frames = [ocode.Frame(main, main.start)]
-        executed = 0
+        self.executed = 0
+        return self._run()
+
+    def resume(self, value: Number) -> CanonProgram:
+        """After a live M66: ``#5399 = value`` (the input read, or -1 for a timeout), run on to the end or the next
+        M66; the canonical program so far, the new calls appended (raises ``ProgramError``)."""
+        if not self.suspended:
+            raise ProgramError(self.where, "resume() without an M66 waiting for its input")
+        self.suspended = False
+        self.params.numbered[5399] = value
+        return self._run()
+
+    def _run(self) -> CanonProgram:
         try:
             while True:
                 frame = self.frames[-1]
@@ -159,8 +185,8 @@ class Interpreter:
                 self.line = line.number
                 self.where = source.where(frame.pc)
                 frame.pc += 1
-                executed += 1
-                if executed > self.max_lines:
+                self.executed += 1
+                if self.executed > self.max_lines:
                     raise ProgramError(self.where, f"the program runs more than {self.max_lines} lines (an endless "
                                                    "loop?)")
                 if line.block_delete and self.block_delete:
@@ -173,7 +199,10 @@ class Interpreter:
                 except (WordError, EvalError) as exc:
                     column = getattr(exc, "column", 0) or 0
                     raise ProgramError(f"{self.where}:{column}" if column else self.where, str(exc)) from None
+                if self.suspended:
+                    return self.program
         except Stop:
+            self.suspended = False  # M2 on the M66's line: the program has ended, nothing waits for the value
             return self.program
 
     # -- O-words -----------------------------------------------------------------------------------
@@ -196,8 +225,9 @@ class Interpreter:
         check_uses(words, state.motion)
         for letter in words.values:
             if letter in "XYZABCUVW" and letter not in self.axes:
-                raise WordError(f"Bad character '{letter.lower()}' used: the machine has no {letter} axis (its "
-                                f"axes: {', '.join(self.axes)})", words.column(letter))
+                why = self.no_axis.get(letter, f"the machine has no {letter} axis (its axes: {', '.join(self.axes)})")
+                raise WordError(f"{letter} word: {why} (LinuxCNC: Bad character '{letter.lower()}' used)",
+                                words.column(letter))
         if line.comments:
             messages.comment(self, line.comments[-1])
         if not words.g and not words.m and not words.values:

@@ -129,9 +129,7 @@ def _if(interp: Interpreter, label: Label, here: int, values: list[Number], fram
     source = frame.file
     index = here
     cond = truth(values, "O-word `if`", interp.where, column)
-    if source.partner(label, here, ("endif",)) is None:
-        raise ProgramError(f"{interp.where}:{column}", f"O-word `if` {label_text(label)}: no matching endif")
-    while not cond:
+    while not cond:  # (a true condition needs no endif until the branch reaches an else: rs274 runs it so)
         nxt = source.partner(label, index, ("elseif", "else", "endif"))
         if nxt is None:
             raise ProgramError(f"{interp.where}:{column}", f"O-word `if` {label_text(label)}: no matching endif")

@@ -2,15 +2,22 @@
 
 :func:`toolpath` follows the canonical calls as LinuxCNC's motion side does: program coordinates
 plus the G92/G52 offset, rotated by the coordinate system's XY rotation, plus the G5x origin, plus
-the tool length offset, in the machine's units; feeds in machine units per second (G93 inverse
+the tool length offset, in the machine's units (rotary axes A, B, C in degrees, as the program
+gives them); feeds in machine units per second along the move's feed axes (XYZ, else UVW, else
+ABC in degrees per second: :func:`~cosim.controllers.pokeys.toolpath.feed_axes`; G93 inverse
 time and G95 per revolution are already per minute in the canonical calls, G95 times the spindle
-speed). What the host does between moves becomes records the planner puts between slots:
+speed). The points have the axes of :attr:`HostSetup.axes`: x, y, z and the other axes the
+machine drives. What the host does between moves becomes records the planner puts between slots:
 
 * spindle (``M3 M4 M5 S``): :class:`~cosim.controllers.pokeys.toolpath.Spindle`;
 * coolant, tool, pauses, digital and analog outputs: :class:`~cosim.controllers.pokeys.toolpath.Output`;
 * a tool change (``M6``): a rapid to the machine file's tool change position (if it gives one),
   ``tool_changing`` = 1 for ``tool_change_time``, the new ``tool``;
-* ``M0`` (and ``M1`` with ``optional_stop``, ``M60``): ``paused`` = 1 for ``pause_time``;
+* ``M0`` (and ``M1`` with ``optional_stop``, ``M60``): ``paused`` = 1 for ``pause_time``, or with
+  ``cycle_start`` until the operator's cycle start (a :class:`~cosim.controllers.pokeys.toolpath.Wait`
+  for a rise of the engine's ``cycle_start`` input);
+* ``M66`` with the machine's inputs (``inputs``): a :class:`~cosim.controllers.pokeys.toolpath.Wait`
+  on ``din<n>`` / ``ain<n>`` (``waiting`` = 1 while it waits, L1-L4);
 * path control (``G61``, ``G61.1``, ``G64 P``): :class:`~cosim.controllers.pokeys.toolpath.PathControl`;
 * ``G5``/``G5.1`` splines: chords within the arc tolerance.
 """
@@ -35,9 +42,15 @@ from cosim.controllers.pokeys.toolpath import (
     Spindle,
     Step,
     Toolpath,
+    Wait,
+    feed_axes,
 )
+from cosim.errors import ConfigurationError
 
 PLANES = {"XY": ((0, 1), 2, "xy"), "XZ": ((2, 0), 1, "zx"), "YZ": ((1, 2), 0, "yz")}
+CANON_AXES = "xyzabcuvw"
+"""The coordinates of a canonical call's point, in order."""
+LINEAR = frozenset("xyzuvw")
 MODES = {"EXACT_STOP": "exact_stop", "EXACT_PATH": "exact_path", "CONTINUOUS": "blend"}
 SPINDLE_CALLS = frozenset({"SET_SPINDLE_SPEED", "START_SPINDLE_CLOCKWISE", "START_SPINDLE_COUNTERCLOCKWISE",
                            "STOP_SPINDLE_TURNING"})
@@ -61,6 +74,14 @@ class HostSetup:
         The optional stop switch is on: M1 pauses.
     arc_tolerance : Fraction
         Largest chord error of spline chords [units].
+    axes : str
+        The axes the host plans: ``"xyz"``, then the machine's other axes among a, b, c, u, v, w
+        (``"xyzab"``); the tool path's points have these coordinates.
+    cycle_start : bool
+        A pause (M0, M60, M1 with ``optional_stop``) lasts until the operator's cycle start (a rise
+        of the ``cycle_start`` input) instead of ``pause_time``.
+    inputs : bool
+        M66 waits on the machine's inputs (a ``Wait``); without them it ends at once (noted).
     """
 
     units: str = "mm"
@@ -69,6 +90,14 @@ class HostSetup:
     pause_time: Fraction = Fraction(0)
     optional_stop: bool = False
     arc_tolerance: Fraction = Fraction(1, 100)
+    axes: str = "xyz"
+    cycle_start: bool = False
+    inputs: bool = False
+
+    def __post_init__(self) -> None:
+        extra = self.axes[3:]
+        if self.axes[:3] != "xyz" or any(a not in CANON_AXES[3:] for a in extra) or len(set(extra)) != len(extra):
+            raise ConfigurationError.out_of_range("host axes", self.axes, "xyz then some of a, b, c, u, v, w")
 
 
 def _exact(value: Number) -> Fraction:
@@ -92,8 +121,13 @@ class _Follower:
         self.outputs: dict[str, float] = {}
         self.steps: list[Step] = []
         self.notes: list[str] = list(program.notes)
-        self.position: Point = (Fraction(0), Fraction(0), Fraction(0))
-        self.rest: tuple[Number, ...] = (0,) * 6
+        self.axes = setup.axes
+        self.extra = [(CANON_AXES.index(a), a in LINEAR) for a in setup.axes[3:]]
+        self.position: Point = (Fraction(0),) * len(setup.axes)
+        self.start = self.position
+        self.done = 0  # calls followed
+        self.unplanned = [i for i in range(3, 9) if CANON_AXES[i] not in setup.axes]
+        self.rest: tuple[Number, ...] = (0,) * len(self.unplanned)
 
     # -- coordinates -------------------------------------------------------------------------------
     def _program_scale(self) -> Fraction:
@@ -109,31 +143,45 @@ class _Follower:
         if self.rotation:
             c, s = math.cos(math.radians(self.rotation)), math.sin(math.radians(self.rotation))
             x, y = x * c - y * s, x * s + y * c
-        return (_exact(x + self.g5x[0] + self.tlo[0]), _exact(y + self.g5x[1] + self.tlo[1]),
-                _exact(z + self.g5x[2] + self.tlo[2]))
+        xyz = (_exact(x + self.g5x[0] + self.tlo[0]), _exact(y + self.g5x[1] + self.tlo[1]),
+               _exact(z + self.g5x[2] + self.tlo[2]))
+        if not self.extra:
+            return xyz
+        return (*xyz, *(_exact((p[i] * k if linear else p[i]) + self.g92[i] + self.g5x[i] + self.tlo[i])
+                        for i, linear in self.extra))
 
     def _in_machine_units(self, values: tuple[Number, ...]) -> tuple[Number, ...]:
         k = self._program_scale()
         return tuple(v * k if i in (0, 1, 2, 6, 7, 8) else v for i, v in enumerate(values))
 
-    def feed_per_s(self) -> Fraction:
+    def feed_per_s(self, axes: str = "xyz") -> Fraction:
+        """The feed [units/s] of a move along ``axes`` (its :func:`feed_axes`: a pure rotary move's is in deg/s)."""
         f = _exact(self.feed)
         if self.feed_mode == 2:
             f = f * _exact(self.spindle.speed)
-        return f * self._program_scale() / 60
+        return f / 60 if axes == "abc" else f * self._program_scale() / 60
 
     # -- calls --------------------------------------------------------------------------------------
     def run(self) -> Toolpath:
-        for call in self.program.calls:
+        self.advance()
+        return Toolpath(tuple(self.steps), source=self.program.source, start=self.start,
+                        skipped=tuple(self.program.skipped), notes=tuple(self.notes), ending=self.program.end,
+                        axes=self.axes)
+
+    def advance(self) -> list[Step]:
+        """Follow the calls the program has gained since the last time; the steps they make."""
+        first = len(self.steps)
+        calls = self.program.calls
+        for call in calls[self.done:]:
             name, args = call.name, call.args
             if self.pending is not None and (name not in SPINDLE_CALLS or call.line != self.pending.line):
                 self._flush_spindle()
             handler = getattr(self, f"_{name.lower()}", None)
             if handler is not None:
                 handler(call.line, *args)
+        self.done = len(calls)
         self._flush_spindle()
-        return Toolpath(tuple(self.steps), source=self.program.source, skipped=tuple(self.program.skipped),
-                        notes=tuple(self.notes), ending=self.program.end)
+        return self.steps[first:]
 
     def _flush_spindle(self) -> None:
         if self.pending is not None:
@@ -189,24 +237,27 @@ class _Follower:
         self._line(p, None, line)
 
     def _straight_feed(self, line: int, *p: Number) -> None:
-        self._line(p, self.feed_per_s(), line)
+        self._line(p, True, line)
 
     def _straight_probe(self, line: int, *p: Number) -> None:
-        self._line(p, self.feed_per_s(), line)
+        self._line(p, True, line)
 
-    def _line(self, p: tuple[Number, ...], feed: Fraction | None, line: int) -> None:
+    def _line(self, p: tuple[Number, ...], feed: bool | None, line: int) -> None:
         self._check_rest(p, line)
         end = self.machine(p)
-        self.steps.append(Line(end, feed, line))
+        speed = self.feed_per_s(feed_axes(self.position, end, self.axes)) if feed else None
+        self.steps.append(Line(end, speed, line))
         self.position = end
 
     def _check_rest(self, p: tuple[Number, ...], line: int) -> None:
-        if tuple(p[3:]) != self.rest:
-            moved = [a for a, old, new in zip("ABCUVW", self.rest, p[3:], strict=True) if old != new]
-            self.rest = tuple(p[3:])
+        rest = tuple(p[i] for i in self.unplanned)
+        if rest != self.rest:
+            moved = [CANON_AXES[i].upper() for i, old, new in zip(self.unplanned, self.rest, rest, strict=True)
+                     if old != new]
+            self.rest = rest
             if moved:
-                text = (f"{self.program.source}:{line}: {', '.join(moved)} moves: the host planner drives x, y, z; "
-                        "the other axes' moves are not modelled")
+                text = (f"{self.program.source}:{line}: {', '.join(moved)} moves: the host planner drives "
+                        f"{', '.join(self.axes)}; the other axes' moves are not modelled")
                 if text not in self.notes:
                     self.notes.append(text)
 
@@ -244,7 +295,7 @@ class _Follower:
             p = list(end)
             if k < n:
                 p[0], p[1], p[2] = x, y, z0 + (z1 - z0) * t
-            self._line(tuple(p), self.feed_per_s(), line)
+            self._line(tuple(p), True, line)
 
     def _program_xy(self) -> tuple[Number, Number]:
         return self._last_program[0], self._last_program[1]
@@ -255,7 +306,7 @@ class _Follower:
     @property
     def _last_program(self) -> tuple[Number, ...]:
         # the program coordinates of the current point: invert the transformation of the last step's end
-        x, y, z = self.position
+        x, y, z = self.position[:3]
         k = self._program_scale()
         px, py, pz = x - self.g5x[0] - self.tlo[0], y - self.g5x[1] - self.tlo[1], z - self.g5x[2] - self.tlo[2]
         if self.rotation:
@@ -285,8 +336,9 @@ class _Follower:
 
     def _change_tool(self, line: int, tool: int) -> None:
         if self.setup.tool_change_position is not None:
-            self.steps.append(Line(self.setup.tool_change_position, None, line))
-            self.position = self.setup.tool_change_position
+            here = (*self.setup.tool_change_position[:3], *self.position[3:])  # the other axes stay
+            self.steps.append(Line(here, None, line))
+            self.position = here
         self._output("tool_changing", 1, line)
         if self.setup.tool_change_time:
             self.steps.append(Pause(self.setup.tool_change_time, line))
@@ -298,7 +350,9 @@ class _Follower:
 
     def _program_stop(self, line: int) -> None:
         self._output("paused", 1, line)
-        if self.setup.pause_time:
+        if self.setup.cycle_start:
+            self.steps.append(Wait("cycle_start", 1, None, line, reads=False))
+        elif self.setup.pause_time:
             self.steps.append(Pause(self.setup.pause_time, line))
         self._output("paused", 0, line)
 
@@ -327,6 +381,14 @@ class _Follower:
     _set_aux_output_value = _set_motion_output_value
 
     def _wait(self, line: int, index: int, digital: int, mode: int, timeout: Number) -> None:
+        if self.setup.inputs:
+            if mode:
+                self._output("waiting", 1, line)
+            self.steps.append(Wait(f"{'din' if digital else 'ain'}{index}", mode, _exact(timeout) if mode else None,
+                                   line))
+            if mode:
+                self._output("waiting", 0, line)
+            return
         if mode:
             note = (f"{self.program.source}:{line}: M66 waits on {'digital' if digital else 'analog'} input {index}: "
                     "inputs are not modelled, the wait ends at once")
@@ -354,3 +416,9 @@ def _bezier(ctrl: list[tuple[float, float]], t: float) -> tuple[float, float]:
 def toolpath(program: CanonProgram, setup: HostSetup | None = None) -> Toolpath:
     """The tool path of a canonical program, in machine coordinates and ``setup.units``."""
     return _Follower(program, setup or HostSetup()).run()
+
+
+def follower(program: CanonProgram, setup: HostSetup) -> _Follower:
+    """A follower of a program that is still growing (a live interpreter's): :meth:`_Follower.advance` gives the
+    steps of the calls added since its last call; ``notes`` are its notes so far."""
+    return _Follower(program, setup)

@@ -177,10 +177,10 @@ def check_uses(words: Words, motion: int) -> None:
         "I": arcs or line_motion in (50, 51, 331, 760, 870) or g0 == 100,
         "J": arcs or line_motion in (50, 51, 760, 870) or g0 == 100,
         "K": arcs or line_motion in (331, 330, 760, 870) or g0 == 100,
-        "R": arcs or cycles or g0 == 100 or line_motion == 760,
+        "R": arcs or cycles or g0 == 100 or line_motion == 760 or 19 in m,
         "P": (arcs or g0 in (40, 100) or g.get(13) == 640 or line_motion in (50, 52, 760, 820, 860, 880, 890, 740,
                                                                             840)
-              or bool(m & {50, 51, 52, 53, 62, 63, 64, 65, 66, 67, 68}) or bool(m & set(range(100, 200)))
+              or bool(m & {19, 50, 51, 52, 53, 62, 63, 64, 65, 66, 67, 68}) or bool(m & set(range(100, 200)))
               or (line_motion == 830 and False)),
         "Q": (line_motion in (50, 52, 730, 760, 830) or g.get(13) == 640 or g0 == 100
               or bool(m & {19, 66, 67, 68, 61}) or bool(m & set(range(100, 200)))),
