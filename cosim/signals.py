@@ -130,8 +130,8 @@ class PulseTrain:
         self._listeners: list[SegmentListener] = []
         self._run_listeners: list[RunListener] = []
         self._end_listeners: list[EndListener] = []
-        self.takes_runs = True
-        """True while every listener takes runs of segments (:meth:`emit_run` may be used)."""
+        self.takes_runs = sim.trace.takes_runs(name)
+        """True while the trace and every listener take runs of segments (:meth:`emit_run` may be used)."""
         self.announces_ends = announces_ends
         """The controller calls :meth:`end_run` at or before the end of every segment that no segment
         continues (the next one does not start where it ends), so a listener need not watch each

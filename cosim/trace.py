@@ -147,6 +147,12 @@ class Trace:
         self._lines_file: Any = None
 
     # -- declaring and recording -------------------------------------------------------------
+    def takes_runs(self, name: str) -> bool:
+        """Whether a model may record ``name`` in runs made ahead of the simulation's now (a PoKeys
+        engine's slots between host events); a trace that must see each record at its own instant
+        (an exported FMU's outputs) says no for those signals."""
+        return True
+
     def may_declare(self, name: str) -> None:
         """Announce a signal the model declares only if the run comes to it (a Trio axis's
         ``reg_pos`` after its first ``REGIST``), so that a check or figure may name it beforehand."""

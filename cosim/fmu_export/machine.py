@@ -111,6 +111,10 @@ class WatchedTrace(Trace):
         #: Called with (name, t) when a watched signal records a value at or before now.
         self.on_change: Callable[[str, int], None] | None = None
 
+    def takes_runs(self, name: str) -> bool:
+        """An output is read, and its events found, at each instant: no runs recorded ahead of now."""
+        return name not in self.watches
+
     def _changed(self, name: str, t: int, value: float) -> None:
         self.watches[name].update(t, value)
         if self.on_change is not None:

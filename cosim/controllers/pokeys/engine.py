@@ -177,6 +177,8 @@ class PulseEngine:
         self._last_key: bytes | None = None  # of the entry the last slot took (None: it took none)
         self._run_emitters = [train.emit_run for train in self.steps]
         self._register_extenders: dict[bytes, Callable[..., None]] = {}  # by run key: its registers at once
+        #: The trace takes the position counters and the buffer level in runs (an exported FMU's outputs: not).
+        self._registers_take_runs = all(sim.trace.takes_runs(r.name) for r in (*self.positions, self.buffer_level))
         sim.process(self.pulse_slot())
 
     # -- host commands ------------------------------------------------------------------------
@@ -410,7 +412,8 @@ class PulseEngine:
 
     def _runs_ok(self) -> bool:
         """Can slots go as runs now: buffer mode, going on from a slot that took data, listeners that take runs."""
-        if self._state is not _BUFFER or self._stretch_start is not None or self._last_key is None:
+        if (self._state is not _BUFFER or self._stretch_start is not None or self._last_key is None
+                or not self._registers_take_runs):
             return False
         for train in self.steps:
             if not train.takes_runs:
