@@ -20,6 +20,7 @@ from fractions import Fraction
 from pathlib import Path
 
 import pytest
+from gcode_machines import ROUTER_AXES
 
 from cosim.controllers.pokeys.gcode import HostSetup, canonical, read_program, read_text
 from cosim.controllers.pokeys.pathplan import HostAxis, plan_toolpath
@@ -30,26 +31,14 @@ from cosim.machine.check import check_machine
 from cosim.runner import run_scenario
 
 F = Fraction
-MACHINE = """
+MACHINE = f"""
 [machine]
 until = "12 s"
 
 [controller]
 family = "pokeys"
 model = "57CNC"
-[controller.axis.x]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.y]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.z]
-steps_per_unit = 400
-max_velocity = 20
-max_accel = 500
-[controller.axis.a]
+{ROUTER_AXES}[controller.axis.a]
 steps_per_unit = 100        # steps per degree
 max_velocity = 360          # degrees/s
 max_accel = 3600            # degrees/s^2

@@ -20,6 +20,7 @@ from fractions import Fraction
 from pathlib import Path
 
 import pytest
+from gcode_machines import ROUTER_AXES
 
 from cosim.cli import main
 from cosim.controllers.pokeys import PulseEngine, encode_entry
@@ -36,25 +37,13 @@ from cosim.runner import run_scenario
 ROUTER = Path(__file__).resolve().parent.parent / "examples" / "pokeys_router" / "router.toml"
 MS = 1_000_000
 
-JOB = """
+JOB = f"""
 [machine]
 until = "12 s"
 
 [controller]
 family = "pokeys"
-[controller.axis.x]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.y]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.z]
-steps_per_unit = 400
-max_velocity = 20
-max_accel = 500
-
+{ROUTER_AXES}
 [host]
 link = "ethernet"
 feed_override = 1.0

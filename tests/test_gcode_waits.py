@@ -24,6 +24,7 @@ import json
 from pathlib import Path
 
 import pytest
+from gcode_machines import ROUTER_AXES
 
 from cosim.controllers.pokeys.gcode import canonical, read_text
 from cosim.errors import ConfigurationError
@@ -32,25 +33,13 @@ from cosim.machine import load_machine
 from cosim.machine.check import check_machine
 from cosim.runner import run_scenario
 
-MACHINE = """
+MACHINE = f"""
 [machine]
 until = "10 s"
 
 [controller]
 family = "pokeys"
-[controller.axis.x]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.y]
-steps_per_unit = 400
-max_velocity = 50
-max_accel = 1000
-[controller.axis.z]
-steps_per_unit = 400
-max_velocity = 20
-max_accel = 500
-
+{ROUTER_AXES}
 [host]
 link = "ethernet"
 

@@ -153,8 +153,9 @@ def mutate(rng: random.Random, text: str) -> str:
     return "".join(chars)
 
 
-def exercise(text: str, *, until_ms: int = 30) -> bool:
-    """Parse ``text`` and, if it parses, run it for ``until_ms`` ms with a second program it may RUN.
+def exercise(text: str, *, until_ms: int = 30, run: bool = True) -> bool:
+    """Parse and compile ``text`` and, if it parses, run it for ``until_ms`` ms with a second program it
+    may RUN (``run`` false: parse and compile only).
 
     Returns True when it parsed. Raises whatever is *not* a :class:`~cosim.errors.CosimError`.
     """
@@ -162,6 +163,8 @@ def exercise(text: str, *, until_ms: int = 30) -> bool:
         program = BasicProgram.parse(text, name="fuzz.bas")
     except CosimError:
         return False
+    if not run:
+        return True
     sim = Simulation(seed=1)
     try:
         trio = TrioController(sim, encoder_at_atype=0)
