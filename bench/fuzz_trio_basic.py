@@ -3,9 +3,10 @@
 Half the inputs are programs written by ``tests/trio_fuzz_programs.generate`` (statements of the modelled
 subset with odd numbers and nesting), half are mutations of those or of the TN20-81 example (characters
 inserted, deleted or replaced, every kind of line end, lines swapped). Each input is parsed and compiled;
-every ``--run-every``-th input that parses (default: each) is also run for 30 simulated ms. A crash is any exception that is not one of the project's own errors
-(:class:`cosim.errors.CosimError`); the first ones are written to ``--crashes`` with their traceback. An
-input that takes more than ``SLOW_S`` of wall time is counted as slow and written there too.
+every ``--run-every``-th input that parses (default: each) is also run for 30 simulated ms. A crash is any
+exception that is not one of the project's own errors (:class:`cosim.errors.CosimError`); the first ones are
+written to ``--crashes`` with their traceback. An input that takes more than ``SLOW_S`` of wall time is
+counted as slow and written there too.
 
 Run (``--workers`` processes, each with its own seed, for ``--minutes`` or until ``--inputs`` inputs in all;
 ``--progress FILE`` rewrites FILE with each worker's counts every 10,000 inputs)::
@@ -79,7 +80,8 @@ def main() -> None:
     parser.add_argument("--inputs", type=int, default=None, help="stop after this many inputs in all")
     parser.add_argument("--progress", default=None, help="write each worker's counts to FILE.<seed>")
     parser.add_argument("--run-every", type=int, default=1, metavar="N",
-                        help="run every N-th input that parses for 30 ms (default 1: each); all are parsed and compiled")
+                        help="run every N-th input that parses for 30 ms (default 1: each); "
+                             "every input is parsed and compiled")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--crashes", default="fuzz_crashes")
