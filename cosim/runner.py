@@ -111,10 +111,12 @@ class Result:
         ``FAIL``          an ordinary check failed (had a violation);
         ``HAZARD MISSED`` a declared hazard (``run.hazard``) was not shown: its check passed or
                           examined nothing;
+        ``UNCHECKED``     an ordinary check examined nothing without ``allow_empty`` (also beside
+                          shown hazards: the hazard does not vouch for a check that saw nothing);
         ``HAZARD SHOWN``  every declared hazard was shown: its check failed with violations;
         ``TERMINATED``    a plant ended the run early (no check failed up to then);
         ``UNCHECKED``     no checks; or every check examined nothing (``checked == 0``, even with
-                          ``allow_empty``); or a check examined nothing without ``allow_empty``;
+                          ``allow_empty``);
         ``PASS``          otherwise: every check passed, and something was checked.
         """
         if self.interrupted is not None:
@@ -126,6 +128,8 @@ class Result:
         hazards = self.hazard_checks
         if self.shown < len(hazards):
             return "HAZARD MISSED"
+        if self.unchecked:
+            return "UNCHECKED"
         if hazards:
             return "HAZARD SHOWN"
         if self.terminated is not None:

@@ -4,7 +4,8 @@ or refused.
     dev.gate  0 ____|‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾‾   on at 100 ns, until the end (1 us)
     dev.step  (declared, never a pulse: a check on it examines nothing)
 
-The first that applies: INTERRUPTED, ERROR, FAIL, HAZARD MISSED, HAZARD SHOWN, TERMINATED, UNCHECKED, PASS.
+The first that applies: INTERRUPTED, ERROR, FAIL, HAZARD MISSED, UNCHECKED (a check examined nothing), HAZARD SHOWN,
+TERMINATED, UNCHECKED (no checks, or none examined anything), PASS.
 """
 
 from __future__ import annotations
@@ -55,6 +56,8 @@ CASES = [
     ("error", ["run.check(ON)", "raise RuntimeError('broken')"], "ERROR", 1),
     ("hazard shown", ["run.hazard(OFF, shows='the gate opens')", "run.check(ON)"], "HAZARD SHOWN", 0),
     ("hazard shown, an ordinary check examined nothing", ["run.hazard(OFF, shows='h')", "run.check(NONE)"],
+     "UNCHECKED", 4),  # the shown hazard does not vouch for a check that saw nothing
+    ("hazard shown, an ordinary check that may be empty", ["run.hazard(OFF, shows='h')", "run.check(NONE_OK)"],
      "HAZARD SHOWN", 0),
     ("hazard missed: its check passed", ["run.hazard(ON, shows='h')"], "HAZARD MISSED", 1),
     ("hazard missed: one of two", ["run.hazard(OFF, shows='h')", "run.hazard(ON, shows='h')"], "HAZARD MISSED", 1),
