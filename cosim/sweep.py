@@ -47,6 +47,8 @@ import numpy as np
 
 from cosim.catalog import load
 from cosim.errors import ConfigurationError
+from cosim.machine import MachineFile
+from cosim.machine.check import check_machine
 from cosim.machine.document import leaves
 from cosim.scenario import Param, ScenarioFile
 from cosim.timebase import NANOSECOND, UNITS_S
@@ -109,6 +111,8 @@ def plan(scenario: str | Path, *, grid: Mapping[str, Sequence[Any]] | None = Non
             checked.add(key)
             try:
                 script.resolve(spec.overrides)
+                if isinstance(script, MachineFile):  # a key's range is checked where the machine is built
+                    check_machine(script, overrides=spec.overrides)
             except ConfigurationError as exc:
                 raise ConfigurationError(f"sweep run {spec.index} ({_shown_values(spec.overrides)}): {exc}") from None
     return runs

@@ -231,3 +231,12 @@ def test_a_machine_file_sweep_has_a_column_per_swept_key(tmp_path: Path, capsys:
     assert main(["sweep", str(machine), "--grid", "check[0].max_count=5", "--workers", "0", "--no-report",
                  "--out", str(tmp_path / "o")]) == 0  # a FAIL is a result of the sweep, not a broken run
     assert "run 0 (check[0].max_count=5): FAIL" in capsys.readouterr().out
+
+
+def test_a_machine_key_out_of_its_range_is_refused_before_the_first_run(tmp_path: Path) -> None:
+    """A PoKeys 56E steps at most 25 kHz: a sweep with 90 kHz in its grid is refused, naming the run, key and range."""
+    machine = tmp_path / "m.toml"
+    machine.write_text(MACHINE)
+    with pytest.raises(ConfigurationError, match=r"sweep run 1 \(controller.axis.x.max_speed_hz=90000\).*"
+                                                 r"max_speed_hz = 90000 is not allowed \(allowed: > 0..25000"):
+        plan(str(machine), grid={"controller.axis.x.max_speed_hz": ["12000", "90000"]})
