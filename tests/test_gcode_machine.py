@@ -106,7 +106,7 @@ def test_unsupported_words_can_be_skipped_and_are_listed_and_the_geometry_words_
     with pytest.raises(ConfigurationError, match=r"job.nc:2:9: M101 is a user M code"):
         check_machine(load_machine(job_machine))
     result = run_scenario(load_machine(job_machine), overrides={"host.allow_unsupported": "true"}, out=tmp_path / "o")
-    assert result.verdict == "PASS" and result.figures["skipped_lines"]["value"] == 1
+    assert result.verdict == "PASS" and result.figures["skipped_words"]["value"] == 1
     meta = json.loads((tmp_path / "o" / "trace_meta.json").read_text())
     (skipped,) = meta["meta"]["gcode"]["skipped"]
     assert skipped.startswith(f"{job_machine.parent / 'job.nc'}:2:9: M101: M101 is a user M code")

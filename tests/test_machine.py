@@ -106,6 +106,8 @@ def test_check_machine_builds_without_running(trio_machine: Path) -> None:
      r"engraver.toml: controller.family: value = 'trrio' is not allowed \(allowed: pmac, pokeys, trio\)"),
     (lambda t: t.replace('model = "Laser"', 'fmu = "missing.fmu"'),
      r"engraver.toml: plant.laser.fmu: FMU file .*missing.fmu does not exist"),
+    (lambda t: t.replace('model = "Laser"', 'fmu = "tn20_81.bas"'),  # a file that is there, but not an FMU
+     r"engraver.toml: plant.laser.fmu: .*tn20_81.bas is not an FMU: fmu = takes an .fmu file"),
     (lambda t: t.replace("laser = { axis = 3 }", 'laser = { axis = 3, variables = { mark_clocks = "pwm_onn" } }'),
      r"plant.laser.laser: laser coupling of laser: role 'mark_clocks' is mapped to 'pwm_onn', which laser does "
      r"not have; did you mean pwm_on"),

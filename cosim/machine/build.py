@@ -135,8 +135,11 @@ def _plant(run: Run, family: Family, controller: Any, name: str, table: Table,
             if not isinstance(fmu, str):
                 raise ConfigurationError.out_of_range("value", fmu, "the path of an .fmu file")
             path = (base / fmu).resolve()
-            if path.suffix != ".fmu" or not path.is_file():
-                raise ConfigurationError(f"FMU file {path} does not exist (or is not an .fmu file)")
+            if not path.is_file():
+                raise ConfigurationError(f"FMU file {path} does not exist")
+            if path.suffix.lower() != ".fmu":
+                raise ConfigurationError(f"{path} is not an FMU: fmu = takes an .fmu file (model = takes a "
+                                         f"bundled model's name)")
             source: str | Path = path
         else:
             if not isinstance(model, str):

@@ -122,14 +122,14 @@ def declare_warnings(run: Run, couplings: Sequence[tuple[str, str, Any]]) -> Non
     def warn() -> None:
         for kind, plant, port in couplings:
             if kind == "laser" and not _fired(trace, port):
-                run.note(f"warning: the laser {plant} never fired: {port.enable.name}, {port.gate.name} and "
+                run.note(f"warning: the laser of plant {plant} never fired: {port.enable.name}, {port.gate.name} and "
                          f"{port.mark_clocks.name} were never on together (no PWM output reached it)")
             elif kind == "stepper" and not _moved(trace, port.step.name, pulses=True):
-                run.note(f"warning: the axis of {plant} never moved: {port.step.name} made no step pulse")
+                run.note(f"warning: the axis of plant {plant} never moved: {port.step.name} made no step pulse")
             elif kind == "servo":
                 signal = _servo_position(port)
                 if signal is not None and signal in trace.info and not _moved(trace, signal, pulses=False):
-                    run.note(f"warning: the axis of {plant} never moved: {signal} never changed")
+                    run.note(f"warning: the axis of plant {plant} never moved: {signal} never changed")
 
     run.afterwards(warn)
 

@@ -13,7 +13,7 @@ figure                            meaning
 ``underruns``, ``underrun_slots``  underruns of the job and their empty slots
 ``first_underrun_ms``             start of the first underrun [ms] (nan: none), ``first_underrun_slots`` its length
 ``slowed_lines``                  G-code lines whose feed the planner slowed (the notes are in ``trace_meta.json``)
-``skipped_lines``                 G-code lines skipped under ``allow_unsupported``
+``skipped_words``                 G-code words skipped under ``allow_unsupported``
 ``<plant>_lost_steps``            full steps a Stepper plant has lost at the end (``lost_full_steps``), and
 ``lost_steps``                    their sum over the machine's steppers
 ================================  =====================================================================
@@ -78,7 +78,7 @@ def declare_figures(run: Run, engine: PulseEngine, host: HostApp, watch: JobWatc
     run.figure("first_underrun_slots", lambda: engine.underruns[0].slots if engine.underruns else 0, "slots")
     if job is not None:
         run.figure("slowed_lines", lambda: len(job.notes))
-        run.figure("skipped_lines", lambda: len(job.skipped))
+        run.figure("skipped_words", lambda: len(job.skipped))
     steppers = [p for p in run.plants if LOST_STEPS in p.variable_names()]
     for plant in steppers:
         run.figure(f"{plant.name}_lost_steps", lambda plant=plant: abs(float(plant.read(LOST_STEPS))),  # type: ignore[misc]
