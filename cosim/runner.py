@@ -419,10 +419,13 @@ def _end_time(sim: Simulation, until: str | int) -> int:
     if isinstance(until, int):
         return sim.timebase.check_ticks(until, name="until", minimum=1)
     try:
-        float(until)
+        number = float(until)
     except ValueError:
         pass
-    else:  # a bare number: a time needs its unit
+    else:
+        if not math.isfinite(number):
+            raise ConfigurationError.out_of_range("until", until, "a finite time > 0 with a unit, e.g. '20 ms'")
+        # a bare number: a time needs its unit
         raise ConfigurationError.out_of_range("until", until, f"a time with a unit: did you mean \"{until} s\"?")
     end = sim.ticks(until, name="until")
     if end <= 0:

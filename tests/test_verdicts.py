@@ -129,6 +129,15 @@ def test_until_shorter_than_the_phases_is_refused_naming_scenario_value_and_mini
                                     "0.5 s: the scenario runs in phases to that time)")
 
 
+@pytest.mark.parametrize(("until", "allowed"), [("5", 'a time with a unit: did you mean "5 s"?'),
+                                               ("nan", "a finite time > 0 with a unit, e.g. '20 ms'"),
+                                               ("inf", "a finite time > 0 with a unit, e.g. '20 ms'")])
+def test_until_without_a_unit_or_not_finite_is_refused_with_what_is_allowed(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], until: str, allowed: str) -> None:
+    assert main(["run", "laser_pwm", "--until", until, "--out", str(tmp_path / "out")]) == 2
+    assert f"until = '{until}' is not allowed (allowed: {allowed})" in capsys.readouterr().err
+
+
 def test_until_stops_a_scenario_that_ends_on_its_own_and_says_the_job_was_cut_short() -> None:
     """trio_example runs its passes to the end (4.4 s by default); --until 50 ms stops it at 50 ms."""
     result = run_scenario(load("trio_example"), overrides={"laser": "false"}, until="50 ms")
