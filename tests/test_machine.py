@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -90,7 +91,14 @@ def test_a_program_given_on_the_command_line_replaces_the_machine_programs(trio_
                                                                           tmp_path: Path) -> None:
     program = tmp_path / "other.bas"
     program.write_text((trio_machine.parent / "tn20_81.bas").read_text())
-    assert main(["run", str(program), "--machine", str(trio_machine), "--out", str(tmp_path / "o")]) == 0
+    # the machine's [job] check = false is said of its own programs: the job of other.bas is checked
+    assert main(["run", str(program), "--machine", str(trio_machine), "--out", str(tmp_path / "o")]) == 1
+    result = json.loads((tmp_path / "o" / "result.json").read_text())
+    assert result["checks"][0]["name"] == "the trio job completed" and result["checks"][0]["outcome"] == "FAIL"
+    assert ("engraver.toml says [job] check = false of its own programs; the job of other.bas is checked "
+            "(--set job.check=false to leave it unchecked)") in result["notes"]
+    assert main(["run", str(program), "--machine", str(trio_machine), "--set", "job.check=false",
+                 "--out", str(tmp_path / "o2")]) == 0  # it repeats for ever, as the user says
     assert main(["run", str(program), "--out", str(tmp_path / "o")]) == 2  # a program needs its machine
 
 

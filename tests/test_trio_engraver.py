@@ -91,12 +91,12 @@ def test_the_note_program_with_other_units_table_and_targets_runs_from_its_text_
         text = text.replace(old, new)
     (tmp_path / "variant.bas").write_text(text)
     (tmp_path / "note.toml").write_text('[machine]\nuntil = "2 s"\n[controller]\nfamily = "trio"\n'
-                                        '[job]\ncheck = false\n'  # the program repeats until stopped
+                                        '[job]\ncheck = true\n'
                                         '[[program]]\nfile = "unused.bas"\n')
     (tmp_path / "unused.bas").write_text("WA(1)\n")
     out = tmp_path / "out"
     assert main(["run", str(tmp_path / "variant.bas"), "--machine", str(tmp_path / "note.toml"),
-                 "--out", str(out), "--allow-unchecked"]) == 0  # no checks in note.toml: this test checks the trace
+                 "--set", "job.check=false", "--out", str(out), "--allow-unchecked"]) == 0  # no checks in note.toml: this test checks the trace
     trace = read_trace(out)
 
     def steps(length: int) -> list[int]:

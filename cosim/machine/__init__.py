@@ -86,11 +86,17 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
     if not path.is_file():
         raise ConfigurationError(f"machine file {path} does not exist")
     document = read_document(path)
+    notes: list[str] = []
     if program is not None:
         program = Path(program)
         if not program.is_file():
             raise ConfigurationError(f"program file {program} does not exist")
         document["program"] = [{"file": str(program.resolve())}]
+        job = document.get("job")
+        if isinstance(job, dict) and job.get("check") is False:  # said of the machine's own programs
+            job["check"] = True
+            notes.append(f"{path.name} says [job] check = false of its own programs; the job of {program.name} "
+                         f"is checked (--set job.check=false to leave it unchecked)")
     _finite(document, path)
     machine = document.get("machine")
     if not isinstance(machine, dict):
@@ -108,7 +114,11 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
     def build(run: Run) -> None:
         from cosim.machine.build import build_machine
 
-        table = Table(run.p.as_dict(), file=path, timebase=run.sim.timebase)
+        values = run.p.as_dict()
+        if values.get("job", {}).get("check", True) is not False:  # (not --set back to false)
+            for note in notes:
+                run.note(note)
+        table = Table(values, file=path, timebase=run.sim.timebase)
         build_machine(run, table, base=path.resolve().parent)
 
     return MachineFile(name=name, path=path.resolve(), description=str(description), parameters=parameters,
