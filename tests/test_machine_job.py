@@ -207,8 +207,8 @@ def test_the_trio_machine_with_pwm_control_1_forgotten_warns_that_its_laser_neve
     (tmp_path / "tn20_81.bas").write_text(text.replace("PWM_CONTROL(1)\n", ""))
     forgotten = run_scenario(load_machine(machine))
     assert forgotten.figures["energy_J"]["value"] == 0
-    assert ("warning: the laser of plant laser never fired: trio.wdog, trio.axis3.gate and trio.axis3.pwm_mark were never on "
-            "together (no PWM output reached it)") in forgotten.notes
+    assert ("warning: the laser of plant laser never fired: trio.wdog, trio.axis3.gate and trio.axis3.pwm_mark were "
+            "never on together (no PWM output reached it)") in forgotten.notes
     assert "note warning: the laser of plant laser never fired" in forgotten.table()
 
 

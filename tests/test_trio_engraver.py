@@ -95,8 +95,9 @@ def test_the_note_program_with_other_units_table_and_targets_runs_from_its_text_
                                         '[[program]]\nfile = "unused.bas"\n')
     (tmp_path / "unused.bas").write_text("WA(1)\n")
     out = tmp_path / "out"
+    # the variant repeats for ever, and note.toml has no checks: this test checks the trace
     assert main(["run", str(tmp_path / "variant.bas"), "--machine", str(tmp_path / "note.toml"),
-                 "--set", "job.check=false", "--out", str(out), "--allow-unchecked"]) == 0  # no checks in note.toml: this test checks the trace
+                 "--set", "job.check=false", "--out", str(out), "--allow-unchecked"]) == 0
     trace = read_trace(out)
 
     def steps(length: int) -> list[int]:
