@@ -181,7 +181,7 @@ class ExpressionCompiler:
         if name in kw.FUNCTIONS and kw.FUNCTIONS[name].low == 0:
             return self.call_function(node, name, [], axis_mod, proc_mod, 0)
         if name in kw.KEYWORDS:
-            raise self.fail(token, f"{name} is not a value here" + (
+            raise self.fail(token, kw.misplaced(name, "value") or f"{name} is not a value here" + (
                 f"; write {kw.FUNCTIONS[name].usage}" if name in kw.FUNCTIONS else ""))
         if axis_mod is not None or proc_mod is not None:
             raise self.fail(token, kw.unknown_name(name) + " (AXIS() and PROC() only modify parameters)")
@@ -205,7 +205,7 @@ class ExpressionCompiler:
             if name in kw.READABLE or name in self.declarations.globals or name in self.declarations.constants:
                 raise self.fail(token, f"{name} is a value, not a function (write {name} without parentheses, or "
                                        f"{name} AXIS(n))")
-            raise self.fail(token, kw.unknown_function(str(token)))
+            raise self.fail(token, kw.misplaced(name, "function") or kw.unknown_function(str(token)))
         return self.call_function(token, name, args, axis_mod, proc_mod, depth)
 
     def call_function(self, node: Tree | Token, name: str, args: list[Any], axis_mod: Tree | None,

@@ -129,6 +129,12 @@ def _in(run: BasicRun, *args: Value) -> Value:
     return sum(io.read_input(n) << (n - first) for n in range(first, last + 1))
 
 
+def _inputs(run: BasicRun, first: int) -> Value:
+    """``INPUTS0`` / ``INPUTS1``: inputs ``first..first+15`` as a 16-bit number (bit 0 = input ``first``)."""
+    io = run.controller.io
+    return sum(io.read_input(n) << (n - first) for n in range(first, min(first + 16, io.channels)))
+
+
 def _read_op(run: BasicRun, *args: Value) -> Value:
     io = run.controller.io
     if len(args) == 1:
@@ -248,4 +254,8 @@ FUNCTIONS: dict[str, Function] = {
     "INSTR": lambda run, *args: _instr(args),
     "AIN": lambda run, n: _ain(run, _num((n,), 0, "AIN")),
     "MOTION_ERROR": _motion_error,
+    "INPUTS0": lambda run: _inputs(run, 0),
+    "INPUTS1": lambda run: _inputs(run, 16),
+    **{f"AIN{n}": (lambda run, n=n: _ain(run, n)) for n in range(4)},
+    **{f"AINBI{n}": (lambda run, n=n: _ain(run, n)) for n in range(4)},
 }

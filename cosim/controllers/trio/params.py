@@ -216,7 +216,9 @@ AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
         ("FE_RANGE", 0, "units", "following error warning range"), ("CLUTCH_RATE", 0, "", "CONNECT ratio rate"),
         ("BACKLASH_DIST", 0, "units", "backlash"), ("S_REF", 0, "", "speed reference (open loop)"),
         ("T_REF", 0, "", "torque reference"), ("ENDMOVE", 0, "units", "end of the current move"),
-        ("ENCODER_RATIO", 1, "", "encoder scaling"), ("STEP_RATIO", 1, "", "step output scaling"))),
+        ("ENCODER_RATIO", 1, "", "MPOS per encoder edge (ENCODER_RATIO(denominator, numerator))"),
+        ("STEP_RATIO", 1, "", "step pulses per demand count (STEP_RATIO(denominator, numerator))"),
+        ("REGIST_SPEED", 0, "units/s", "registration speed"))),
     *(_P(name, default, allowed, conv, "", doc, acts=False) for name, default, allowed, conv, doc in (
         ("FHOLD_IN", -1, "-1 or an input", _input_channel, "feedhold input"),
         ("AXIS_ENABLE", 1, "ON/OFF", _flag, "axis enable"), ("VERIFY", 0, "ON/OFF", _flag, "step verification"),
