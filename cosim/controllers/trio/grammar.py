@@ -13,7 +13,8 @@ variable), how many arguments it takes and whether it is modelled is decided by 
 (:mod:`.compiler`), which names the construct in its messages. Only the statements with a syntax of
 their own have rules: ``PRINT``/``INPUT``/``GET``/``LINPUT`` with ``#channel``, a command on a
 channel (``OPEN #5 AS "log" FOR OUTPUT``, ``CLOSE #5``), ``DIM ... AS``, ``CONSTANT``, ``GLOBAL``,
-``INCLUDE``, ``ON BASICERROR``, ``ON ... GOTO/GOSUB``, ``WAIT``, the loops and ``IF``. So a statement the manual documents is never a syntax error.
+``INCLUDE``, ``ON BASICERROR``, ``ON ... GOTO/GOSUB``, ``WAIT``, the loops and ``IF``. So a statement
+the manual documents is never a syntax error.
 
 The LALR parser is built on the first :func:`parser` call and kept (building it costs tens of
 milliseconds: never at import time).
@@ -104,6 +105,7 @@ _args: expr (_COMMA expr)*
      | _IDLE mods -> idle_ref
      | _LOADED mods -> loaded_ref
      | NAME "(" [_args] ")" mods -> func
+     | NAME "#" atom -> channel_func
      | "(" expr ")"
 
 _WAIT: "WAIT"i

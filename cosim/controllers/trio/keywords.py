@@ -91,7 +91,7 @@ COMMANDS: dict[str, Signature] = _sigs(
     ("CLEAR_BIT", 2, 2, "CLEAR_BIT(bit, vr)"),
     ("SET_BIT", 2, 2, "SET_BIT(bit, vr)"),
     ("FLAG", 1, 2, "FLAG(flag, ON/OFF)"),
-    ("FLAGS", 1, 1, "FLAGS(value)"),
+    ("FLAGS", 1, 1, "FLAGS(value) (FLAGS alone reads them)"),
     ("INVERT_IN", 2, 2, "INVERT_IN(input, ON/OFF)"),
     ("ENCODER_RATIO", 2, 2, "ENCODER_RATIO(denominator, numerator)", True),
     ("STEP_RATIO", 2, 2, "STEP_RATIO(denominator, numerator)", True),
@@ -107,7 +107,6 @@ SETTINGS: dict[str, Signature] = _sigs(
     ("DEFKEY", 1, None, "DEFKEY(...)"),
     ("CURSOR", 1, 1, "CURSOR(position)"),
     ("EPROM", 0, 0, "EPROM"),
-    ("POWER_UP", 0, 1, "POWER_UP"),
     ("COMPILE", 0, 0, "COMPILE"),
     ("SELECT", 0, 1, "SELECT \"program\""),
     ("LIST", 0, 1, "LIST"),
@@ -117,7 +116,10 @@ SETTINGS: dict[str, Signature] = _sigs(
     ("RENAME", 0, 2, "RENAME \"program\" \"new name\""),
     ("LOCK", 0, 1, "LOCK(code)"),
     ("UNLOCK", 0, 1, "UNLOCK(code)"),
-    ("DISPLAY", 0, 1, "DISPLAY = value"),
+    ("STORE", 0, 0, "STORE"),
+    ("EXECUTE", 1, None, "EXECUTE \"command\""),
+    ("INITIALISE", 0, 0, "INITIALISE"),
+    ("DIR", 0, 0, "DIR"),
     ("ENABLE_OP", 1, 1, "ENABLE_OP(mask)"),
     ("PSWITCH", 1, 7, "PSWITCH(switch, enable[, axis, output, state, set position, reset position])"),
     ("READPACKET", 1, None, "READPACKET(...)"),
@@ -130,7 +132,6 @@ SETTINGS: dict[str, Signature] = _sigs(
     ("STEPLINE", 0, 2, "STEPLINE"),
     ("TROFF", 0, 1, "TROFF"),
     ("TRON", 0, 0, "TRON"),
-    ("FRAME", 0, 1, "FRAME = value"),
     ("SEND", 1, None, "SEND(...)"),
 )
 
@@ -153,6 +154,8 @@ MOTION_NOT_MODELLED: dict[str, Signature] = _sigs(
     ("DEC", 1, 1, "DEC(rate) (use DECEL)", True),
     ("DLINK", 1, None, "DLINK(function, ...) (later firmware)", True),
     ("TIMER", 4, 5, "TIMER(timer, output, pattern, time[, option])"),
+    ("RECORD", 1, None, "RECORD(...) (registration recording, later firmware)", True),
+    ("MATCH", 1, None, "MATCH(...) (registration matching, later firmware)", True),
 )
 
 #: Functions used in expressions (``NAME(args)``).
@@ -192,6 +195,9 @@ FUNCTIONS: dict[str, Signature] = _sigs(
     ("INSTR", 2, 3, "INSTR([start, ]string, search)"),
     ("AIN", 1, 1, "AIN(channel)"),
     ("MOTION_ERROR", 0, 0, "MOTION_ERROR"),
+    ("FLAGS", 0, 0, "FLAGS (all 32 flags as a number)"),
+    ("IEEE_IN", 4, 4, "IEEE_IN(byte0, byte1, byte2, byte3)"),
+    ("IEEE_OUT", 2, 2, "IEEE_OUT(value, byte 0..3)"),
     # the inputs as numbers and the analogue channels by name (TRM 8-93, 8-103)
     ("INPUTS0", 0, 0, "INPUTS0 (inputs 0..15 as a number)"),
     ("INPUTS1", 0, 0, "INPUTS1 (inputs 16..31 as a number)"),
@@ -216,9 +222,15 @@ PROCESS_WRITABLE = frozenset({"TICKS", "INDEVICE", "OUTDEVICE"})
 SYSTEM_STORED: dict[str, int] = {"SCOPE_POS": 0, "LAST_AXIS": 3, "POS_OFFSET": 0, "NEG_OFFSET": 0,
                                  "ERROR_AXIS": -1, "SYSTEM_ERROR": 0, "VERSION": 0, "FREE": 47104,
                                  "NIO": 32, "TSIZE": 16000, "CONTROL": 205, "D_ZONE": 0, "BATTERY_LOW": 0,
-                                 "AOUT0": 0, "AOUT1": 0, "AOUT2": 0, "AOUT3": 0}
-#: Stored system parameters a program may write (``AOUT0 = 1000``: the analogue outputs, TRM 8-93).
-SYSTEM_WRITABLE = frozenset({"AOUT0", "AOUT1", "AOUT2", "AOUT3"})
+                                 "AOUT0": 0, "AOUT1": 0, "AOUT2": 0, "AOUT3": 0, "DISPLAY": 0, "FRAME": 0,
+                                 "POWER_UP": 0, "TIME": 0, "DATE": 0, "DAY": 0, "ADDRESS": 0, "LIMIT_BUFFERED": 1,
+                                 "CHECKSUM": 0, "COMMSERROR": 0, "COMMSTYPE": 0}
+#: Stored system parameters a program may write (``AOUT0 = 1000``: the analogue outputs, TRM 8-93; the
+#: display, the frame, the power-up mode, the clock, the network address, the buffered limit).
+SYSTEM_WRITABLE = frozenset({"AOUT0", "AOUT1", "AOUT2", "AOUT3", "DISPLAY", "FRAME", "POWER_UP", "TIME", "DATE",
+                             "DAY", "ADDRESS", "LIMIT_BUFFERED"})
+#: Functions of a channel (``KEY #1``).
+CHANNEL_FUNCTIONS = frozenset({"KEY"})
 
 #: Names a program can read as values.
 CONSTANTS: dict[str, int] = {"ON": ON, "OFF": OFF, "TRUE": TRUE, "FALSE": FALSE}
@@ -267,6 +279,7 @@ GRAMMAR_WORDS: dict[str, str] = {
 }
 
 
+_CLOSES = {"ENDIF": "IF", "NEXT": "FOR", "WEND": "WHILE", "UNTIL": "REPEAT"}
 _AS_WHAT = {"command": "a command", "channel": "a command", "function": "a function", "value": "a value",
             "assignment": "the target of an assignment"}
 
@@ -280,13 +293,17 @@ def misplaced(name: str, where: str) -> str | None:
     'MOD is an operator: write a MOD b (17 MOD 5 is 2); it cannot stand as a value'
     """
     upper = name.upper()
+    opener = _CLOSES.get(upper)
+    if opener is not None and where in ("command", "channel"):
+        article = "an" if opener == "IF" else "a"
+        return f"{upper} closes {article} {opener} block, but no {opener} block is open here"
     if upper in GRAMMAR_WORDS:
         return f"{upper} is {GRAMMAR_WORDS[upper]}; it cannot stand as {_AS_WHAT.get(where, where)}"
     if where in ("command", "channel") and upper in READABLE:
         if upper in WRITABLE:
             return f"{upper} is a parameter; write {upper} = value (a parameter is not a command)"
         return f"{upper} is a read-only parameter; read it in an expression (x = {upper})"
-    if where == "command" and upper in FUNCTIONS:
+    if where in ("command", "channel") and upper in FUNCTIONS:
         return f"{upper}(...) is a function, not a command; use it in an expression"
     if where == "assignment" and (upper in ALL_COMMANDS or upper in FUNCTIONS):
         kind = "a command" if upper in ALL_COMMANDS else "a function"

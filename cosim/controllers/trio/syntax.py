@@ -60,7 +60,7 @@ def open_blocks(text: str, *, until_line: int | None = None) -> list[tuple[str, 
             if not words:
                 continue
             first = words[0].upper()
-            if first == "IF" and words[-1].upper() == "THEN" or first in ("FOR", "WHILE", "REPEAT"):
+            if (first == "IF" and words[-1].upper() == "THEN") or first in ("FOR", "WHILE", "REPEAT"):
                 stack.append((first, number))
             elif first in _CLOSERS:
                 for k in range(len(stack) - 1, -1, -1):
