@@ -77,7 +77,6 @@ def test_encoder_ratio_and_step_ratio_store_numerator_over_denominator() -> None
 ])
 def test_the_ratios_take_24_bit_terms(text: str, message: str) -> None:
     """Each term 0..16777215 (a denominator of 0 would divide by zero: 1..16777215)."""
-    assert "16777215" in message or "16777216" in text
     with pytest.raises(ConfigurationError, match=message):
         run(text + "\n")
 
