@@ -24,7 +24,7 @@ MS = 1_000_000
 #: A valid value for each parameter (an input number, an ON/OFF, a positive number...).
 VALID = {"ATYPE": 1, "INVERT_STEP": 1, "SERVO": 1, "AXIS_ENABLE": 0, "VERIFY": 1, "FE_LIMIT_MODE": 1,
          "AXIS_DISPLAY": 2, "ENCODER_BITS": 25, "ENCODER_CONTROL": 1, "PP_STEP": -3, "ERRORMASK": 256,
-         "REP_OPTION": 1, "MERGE": 1, "SRAMP": 50, "PWM_CYCLE": 1000, "PWM_MARK": 400}
+         "REP_OPTION": 1, "MERGE": 1, "SRAMP": 50, "PWM_CYCLE": 1000, "PWM_MARK": 400, "MICROSTEP": 1}
 
 
 @pytest.mark.parametrize("name", sorted(AXIS_PARAMS))

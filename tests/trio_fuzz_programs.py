@@ -21,17 +21,20 @@ NUMBERS = ["0", "1", "2", "3", "-1", "0.5", ".5", "2.5e1", "1e9", "1e-40", "$FF"
 HUGE = ["3e9", "1e99", "2147483648", "$80000000", "1e99999999"]
 PARAMS = ["UNITS", "SPEED", "ACCEL", "DECEL", "ATYPE", "SERVO", "FE_LIMIT", "PWM_CYCLE", "PWM_MARK", "INVERT_STEP",
           "WDOG", "TICKS", "CREEP", "JOGSPEED", "DATUM_IN", "FWD_IN", "REV_IN", "FWD_JOG", "FS_LIMIT", "RS_LIMIT",
-          "REP_DIST", "REP_OPTION", "MERGE", "SRAMP", "P_GAIN", "OFFPOS", "OUTDEVICE"]
+          "REP_DIST", "REP_OPTION", "MERGE", "SRAMP", "P_GAIN", "OFFPOS", "OUTDEVICE", "AOUT0", "REGIST_SPEED",
+          "ENCODER_RATIO"]
 READ_ONLY = ["DPOS", "MPOS", "VP_SPEED", "OFFPOS", "PWM_ENCODER", "FE", "IDLE", "LOADED", "SERVO_PERIOD", "ON",
              "OFF", "TRUE", "FALSE", "AXISSTATUS", "MARK", "REG_POS", "MTYPE", "PROC_STATUS PROC(1)", "PROCNUMBER",
-             "RUN_ERROR", "ERROR_LINE", "PI", "KEY", "TOP", "G"]
+             "RUN_ERROR", "ERROR_LINE", "PI", "KEY", "TOP", "G", "KEY #1", "INPUTS0", "INPUTS1", "AIN0", "FLAGS",
+             "TRANS_DPOS", "MARKB"]
 VARIABLES = ["a", "b", "x", "i", "n"]
 OPERATORS = ["+", "-", "*", "/", "MOD", "AND", "OR", "XOR", "=", "<>", "<", ">", "<=", ">="]
 FUNCTIONS = ["ABS", "INT", "SGN", "SQR", "VR", "TABLE", "IN", "READ_OP", "OP", "SIN", "COS", "ATAN", "EXP", "LN",
              "FRAC", "LEN", "VAL", "FLAG", "arr"]
 STRINGS = ['"ab"', 'CHR(65)', 'HEX(255)', 'STR(1.5)', 'LEFT("abc", 2)', 'MID("conveyor", 2, 3)', "s", 'UCASE(s)']
 ODD = ["\r", "\r\n", "\x0b", "\x0c", "\x85", "\u2028", "\x00", "'", '"', ":", "(", ")", ",", ";", "$", "=", " ",
-       "\t", "IF", "THEN", "ENDIF", "NEXT", "WEND", "UNTIL", "GOTO", "GOSUB", "RETURN", "label:", "é", "\ufeff"]
+       "\t", "IF", "THEN", "ENDIF", "NEXT", "WEND", "UNTIL", "GOTO", "GOSUB", "RETURN", "label:", "é", "\ufeff",
+       "#", "OPEN #5 AS ", "CLOSE #", " FOR INPUT", "PROC", "MOD("]
 
 
 def _number(rng: random.Random) -> str:

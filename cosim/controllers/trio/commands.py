@@ -10,6 +10,7 @@ motion commands without a model stop the program with an error naming them.
 from __future__ import annotations
 
 from collections.abc import Callable
+from fractions import Fraction
 from typing import TYPE_CHECKING, Any
 
 from simpy.events import Event
@@ -154,6 +155,22 @@ def _invert_in(run: BasicRun, args: list[Datum], axis: Value | None) -> None:
     run.controller.io.invert_input(channel, state)
 
 
+#: Largest term of ENCODER_RATIO / STEP_RATIO (a 24-bit count).
+RATIO_MAX = 16_777_215
+
+
+def _ratio(name: str) -> Handler:
+    """``ENCODER_RATIO(denominator, numerator)`` / ``STEP_RATIO(...)``: the ratio numerator / denominator is
+    stored in the axis parameter of the same name (readable back) and listed as "set, not modelled"."""
+    def handler(run: BasicRun, args: list[Datum], axis: Value | None) -> None:
+        denominator, numerator = (integer_part(v) for v in _n(args, name))
+        for what, value, low in (("denominator", denominator, 1), ("numerator", numerator, 0)):
+            if not low <= value <= RATIO_MAX:
+                raise BasicError(f"{name} {what} = {value} is not allowed (allowed: {low}..{RATIO_MAX})", 1)
+        run.process.set(name, Fraction(numerator, denominator), axis=axis)
+    return handler
+
+
 HANDLERS: dict[str, Handler] = {
     "BASE": _base, "TABLE": _table, "PWM_CONTROL": _pwm_control, "DEFPOS": _defpos,
     "MOVE": _motion("move", "MOVE"), "MOVEABS": _motion("moveabs", "MOVEABS"),
@@ -164,6 +181,7 @@ HANDLERS: dict[str, Handler] = {
     "CANCEL": _cancel, "RAPIDSTOP": _rapidstop, "DATUM": _datum, "REGIST": _regist, "TRIGGER": _trigger,
     "WA": _wa, "OP": _op, "RUN": _run, "STOP": _stop, "HALT": _halt, "PROCESS": _process, "CLEAR": _clear,
     "CLEAR_BIT": _bit(False), "SET_BIT": _bit(True), "FLAG": _flag, "FLAGS": _flags, "INVERT_IN": _invert_in,
+    "ENCODER_RATIO": _ratio("ENCODER_RATIO"), "STEP_RATIO": _ratio("STEP_RATIO"),
 }
 
 
@@ -176,8 +194,9 @@ def setting(name: str) -> Handler:
 
 
 def not_modelled(name: str) -> Handler:
-    """A motion command without a model: an error naming it when the program reaches it."""
+    """A command that moves or switches outputs without a model: an error naming it when the program reaches it."""
+    what = "an output timer" if name == "TIMER" else "a motion command"
     def handler(run: BasicRun, args: list[Datum], axis: Value | None) -> Any:
-        raise BasicError(f"{name} is a Trio motion command this model does not simulate (see docs/trio.md for the "
-                         "modelled ones)", 8)
+        raise BasicError(f"{name} is {what} of Trio BASIC this model does not simulate (see docs/trio.md for "
+                         "the modelled ones)", 8)
     return handler

@@ -159,7 +159,7 @@ class Compiler(ExpressionCompiler):
         if name in kw.WRITABLE:
             if proc_mod is not None:
                 raise self.fail(proc_mod, f"{name} is not a process parameter; it takes no PROC()")
-            if axis_mod is not None and name == "WDOG":
+            if axis_mod is not None and (name == "WDOG" or name in kw.SYSTEM_WRITABLE):
                 raise self.fail(token, f"{name} is not an axis parameter; write {name} = value without AXIS()")
             axis = self.axis(axis_mod)
 
@@ -175,7 +175,7 @@ class Compiler(ExpressionCompiler):
             hint = " (use DEFPOS)" if name in ("DPOS", "MPOS") else ""
             raise self.fail(token, f"{name} is read-only{hint}")
         if name in kw.KEYWORDS:
-            raise self.fail(token, f"cannot assign to {name}")
+            raise self.fail(token, kw.misplaced(name, "assignment") or f"cannot assign to {name}")
         if axis_mod is not None or proc_mod is not None:
             raise self.fail(token, kw.unknown_name(name) + " (AXIS() and PROC() only modify parameters)")
         if name in self.arrays:
@@ -238,20 +238,30 @@ class Compiler(ExpressionCompiler):
         args = [a for a in args if a is not None]
         name = str(token).upper()
         if name not in kw.ALL_COMMANDS:
-            if name in kw.FUNCTIONS:
-                raise self.fail(token, f"{name}(...) is a function, not a command; use it in an expression")
             if name in self.arrays:
                 raise self.fail(token, f"{name}(...) is an array element; assign it with {name}(index) = value")
-            raise self.fail(token, kw.unknown_command(str(token)))
+            raise self.fail(token, kw.misplaced(name, "command") or kw.unknown_command(str(token)))
         self.command(node, kw.ALL_COMMANDS[name], args, mods)
 
     def s_string_call(self, node: Tree, depth: int) -> None:
         token, text, *args = node.children
         name = str(token).upper()
         if name not in kw.ALL_COMMANDS:
-            raise self.fail(token, kw.unknown_command(str(token)))
+            raise self.fail(token, kw.misplaced(name, "command") or kw.unknown_command(str(token)))
         string = Tree("string", [text], meta=node.meta)
         self.command(node, kw.ALL_COMMANDS[name], [string, *[a for a in args if a is not None]], None)
+
+    def s_channel_call(self, node: Tree, depth: int) -> None:
+        """``OPEN #5 AS "log" FOR OUTPUT``, ``CLOSE #5``: a command whose first argument is a channel."""
+        token, channel, *rest = node.children
+        *args, as_node, mode = rest
+        name = str(token).upper()
+        if name not in kw.ALL_COMMANDS:
+            raise self.fail(token, kw.misplaced(name, "channel") or kw.unknown_command(str(token)))
+        word = None if mode is None else "INPUT" if mode.data == "mode_input" else str(mode.children[0]).upper()
+        words = [] if word is None else [Tree("string", [Token("STRING", f'"{word}"')], meta=node.meta)]
+        extra = [a for a in (*args, as_node) if a is not None]
+        self.command(node, kw.ALL_COMMANDS[name], [channel, *extra, *words], None)
 
     def s_bare(self, node: Tree, depth: int) -> None:
         token, mods = node.children
@@ -261,10 +271,10 @@ class Compiler(ExpressionCompiler):
             if signature.low:
                 raise self.fail(token, f"{name} needs its arguments: {signature.usage}")
             self.command(node, signature, [], mods)
-        elif name in kw.READABLE or name in self.declarations.globals:
+        elif name in self.declarations.globals:
             raise self.fail(token, f"{name} is a parameter; write {name} = value")
         else:
-            raise self.fail(token, kw.unknown_command(str(token)))
+            raise self.fail(token, kw.misplaced(name, "command") or kw.unknown_command(str(token)))
 
     def command(self, node: Tree, signature: kw.Signature, args: list[Any], mods: Tree | None) -> None:
         name = signature.name

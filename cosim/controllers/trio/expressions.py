@@ -137,6 +137,8 @@ class ExpressionCompiler:
             return lambda run: fit(run.process.get(key, axis=axis(run)))
         if kind == "func":
             return self.function(node, depth)
+        if kind == "channel_func":
+            return self.channel_function(node, depth)
         if kind in ("sum", "term", "or_expr", "and_expr", "pow_expr"):
             first = self.expr(kids[0], depth + 1)
             rest = [(ops.BINARY[str(kids[k]).upper()], self.expr(kids[k + 1], depth + 1))
@@ -181,7 +183,7 @@ class ExpressionCompiler:
         if name in kw.FUNCTIONS and kw.FUNCTIONS[name].low == 0:
             return self.call_function(node, name, [], axis_mod, proc_mod, 0)
         if name in kw.KEYWORDS:
-            raise self.fail(token, f"{name} is not a value here" + (
+            raise self.fail(token, kw.misplaced(name, "value") or f"{name} is not a value here" + (
                 f"; write {kw.FUNCTIONS[name].usage}" if name in kw.FUNCTIONS else ""))
         if axis_mod is not None or proc_mod is not None:
             raise self.fail(token, kw.unknown_name(name) + " (AXIS() and PROC() only modify parameters)")
@@ -205,8 +207,19 @@ class ExpressionCompiler:
             if name in kw.READABLE or name in self.declarations.globals or name in self.declarations.constants:
                 raise self.fail(token, f"{name} is a value, not a function (write {name} without parentheses, or "
                                        f"{name} AXIS(n))")
-            raise self.fail(token, kw.unknown_function(str(token)))
+            raise self.fail(token, kw.misplaced(name, "function") or kw.unknown_function(str(token)))
         return self.call_function(token, name, args, axis_mod, proc_mod, depth)
+
+    def channel_function(self, node: Tree, depth: int) -> Expr:
+        """``KEY #channel``: a function of a channel (TRM: KEY #n is TRUE while channel n has a character)."""
+        token, channel_node = node.children
+        name = str(token).upper()
+        if name not in kw.CHANNEL_FUNCTIONS:
+            raise self.fail(token, f"{name} #channel is not a function of a channel (allowed: "
+                                   f"{', '.join(f'{n} #channel' for n in sorted(kw.CHANNEL_FUNCTIONS))})")
+        channel = self.expr(channel_node, depth + 1)
+        function = FUNCTIONS[name]
+        return lambda run: function(run, channel(run))
 
     def call_function(self, node: Tree | Token, name: str, args: list[Any], axis_mod: Tree | None,
                       proc_mod: Tree | None, depth: int) -> Expr:

@@ -9,6 +9,8 @@ the same bits on every machine.
 
 from __future__ import annotations
 
+import math
+import struct
 from collections.abc import Callable
 from fractions import Fraction
 from typing import TYPE_CHECKING
@@ -127,6 +129,41 @@ def _in(run: BasicRun, *args: Value) -> Value:
         raise BasicError(f"IN({first}, {last}) is not allowed (allowed: a range of at most 24 inputs, first <= last)",
                          1)
     return sum(io.read_input(n) << (n - first) for n in range(first, last + 1))
+
+
+def _inputs(run: BasicRun, first: int) -> Value:
+    """``INPUTS0`` / ``INPUTS1``: inputs ``first..first+15`` as a 16-bit number (bit 0 = input ``first``)."""
+    io = run.controller.io
+    return sum(io.read_input(n) << (n - first) for n in range(first, min(first + 16, io.channels)))
+
+
+def _ieee_in(*values: Value) -> Value:
+    """``IEEE_IN(b0, b1, b2, b3)``: the IEEE 754 single-precision number of four bytes, b0 the most significant
+    (sign and exponent) [?: byte order as in network order]; exact (a float is a binary fraction)."""
+    data = bytes(_byte(v, "IEEE_IN byte") for v in values)
+    number_ = struct.unpack(">f", data)[0]
+    if not math.isfinite(number_):
+        raise BasicError(f"IEEE_IN({', '.join(str(b) for b in data)}) is not a finite number", 1)
+    return fit(Fraction(number_))
+
+
+def _ieee_out(value: Value, n: Value) -> Value:
+    """``IEEE_OUT(value, n)``: byte ``n`` (0 the most significant) of ``value`` as an IEEE 754 single."""
+    k = integer_part(n)
+    if not 0 <= k <= 3:
+        raise BasicError(f"IEEE_OUT byte = {k} is not allowed (allowed: 0..3)", 1)
+    try:
+        data = struct.pack(">f", float(value))
+    except OverflowError:
+        raise BasicError(f"IEEE_OUT value = {float(value)} does not fit an IEEE 754 single", 1) from None
+    return data[k]
+
+
+def _byte(value: Value, name: str) -> int:
+    b = integer_part(value)
+    if not 0 <= b <= 255:
+        raise BasicError(f"{name} = {b} is not allowed (allowed: 0..255)", 1)
+    return b
 
 
 def _read_op(run: BasicRun, *args: Value) -> Value:
@@ -248,4 +285,11 @@ FUNCTIONS: dict[str, Function] = {
     "INSTR": lambda run, *args: _instr(args),
     "AIN": lambda run, n: _ain(run, _num((n,), 0, "AIN")),
     "MOTION_ERROR": _motion_error,
+    "FLAGS": lambda run: run.controller.flags,
+    "IEEE_IN": lambda run, *args: _ieee_in(*(_num(args, k, "IEEE_IN") for k in range(4))),
+    "IEEE_OUT": lambda run, value, n: _ieee_out(_num((value,), 0, "IEEE_OUT"), _num((n,), 0, "IEEE_OUT")),
+    "INPUTS0": lambda run: _inputs(run, 0),
+    "INPUTS1": lambda run: _inputs(run, 16),
+    **{f"AIN{n}": (lambda run, n=n: _ain(run, n)) for n in range(4)},
+    **{f"AINBI{n}": (lambda run, n=n: _ain(run, n)) for n in range(4)},
 }

@@ -11,9 +11,10 @@ each with ``AXIS(n)`` / ``PROC(n)`` modifiers, and ``NAME "text", args`` (``RUN 
 ``STOP "PROG"``) is a statement the parser accepts; what a name means (a command, a parameter, a
 variable), how many arguments it takes and whether it is modelled is decided by the compiler
 (:mod:`.compiler`), which names the construct in its messages. Only the statements with a syntax of
-their own have rules: ``PRINT``/``INPUT``/``GET``/``LINPUT`` with ``#channel``, ``DIM ... AS``,
-``CONSTANT``, ``GLOBAL``, ``INCLUDE``, ``ON BASICERROR``, ``ON ... GOTO/GOSUB``, ``WAIT``, the loops
-and ``IF``. So a statement the manual documents is never a syntax error.
+their own have rules: ``PRINT``/``INPUT``/``GET``/``LINPUT`` with ``#channel``, a command on a
+channel (``OPEN #5 AS "log" FOR OUTPUT``, ``CLOSE #5``), ``DIM ... AS``, ``CONSTANT``, ``GLOBAL``,
+``INCLUDE``, ``ON BASICERROR``, ``ON ... GOTO/GOSUB``, ``WAIT``, the loops and ``IF``. So a statement
+the manual documents is never a syntax error.
 
 The LALR parser is built on the first :func:`parser` call and kept (building it costs tens of
 milliseconds: never at import time).
@@ -32,7 +33,7 @@ _sep: _NL | ":"
 
 _stmt: _simple | repeat | while_loop | for_loop | if_block | if_line | label
 
-_simple: assign | call | bare | string_call | wait_idle | wait_loaded | wait_until | goto | gosub
+_simple: assign | call | bare | string_call | channel_call | wait_idle | wait_loaded | wait_until | goto | gosub
        | return_stmt | print_stmt | input_stmt | get_stmt | linput_stmt | dim_stmt | constant_stmt
        | global_stmt | include_stmt | on_error | on_jump
 
@@ -41,6 +42,9 @@ assign: NAME [index] mods _EQ expr
 call: NAME "(" [_args] ")" mods
 bare: NAME mods
 string_call: NAME STRING (_COMMA expr)*
+channel_call: NAME "#" atom (_COMMA expr)* [_AS expr] [_FOR open_mode]
+open_mode: _INPUT -> mode_input
+         | NAME -> mode_name
 mods: (axis_mod | proc_mod)*
 index: "(" _args ")"
 wait_idle: _WAIT _IDLE mods
@@ -101,6 +105,7 @@ _args: expr (_COMMA expr)*
      | _IDLE mods -> idle_ref
      | _LOADED mods -> loaded_ref
      | NAME "(" [_args] ")" mods -> func
+     | NAME "#" atom -> channel_func
      | "(" expr ")"
 
 _WAIT: "WAIT"i
@@ -165,7 +170,7 @@ TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXN
              "STRING": "a \"string\"", "LABEL": "a label", "LPAR": "(", "RPAR": ")", "COMMA": ",", "_COMMA": ",",
              "COLON": ":", "SEMICOLON": ";", "MINUS": "-", "PLUS": "+", "_EQ": "=", "CMP": "a comparison",
              "ADD": "+ or -", "MUL": "* / MOD", "POW": "^", "LOGIC_AND": "AND", "LOGIC_OR": "OR XOR",
-             "LSQB": "[", "RSQB": "]", "__ANON_0": "#"}
+             "LSQB": "[", "RSQB": "]", "__ANON_0": "#", "$END": "end of program"}
 
 
 @cache

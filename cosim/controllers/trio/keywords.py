@@ -91,9 +91,10 @@ COMMANDS: dict[str, Signature] = _sigs(
     ("CLEAR_BIT", 2, 2, "CLEAR_BIT(bit, vr)"),
     ("SET_BIT", 2, 2, "SET_BIT(bit, vr)"),
     ("FLAG", 1, 2, "FLAG(flag, ON/OFF)"),
-    ("FLAGS", 1, 1, "FLAGS(value)"),
+    ("FLAGS", 1, 1, "FLAGS(value) (FLAGS alone reads them)"),
     ("INVERT_IN", 2, 2, "INVERT_IN(input, ON/OFF)"),
-
+    ("ENCODER_RATIO", 2, 2, "ENCODER_RATIO(denominator, numerator)", True),
+    ("STEP_RATIO", 2, 2, "STEP_RATIO(denominator, numerator)", True),
 )
 
 #: Commands the model accepts and lists as "set, not modelled" (communications, set-up, tools).
@@ -106,7 +107,6 @@ SETTINGS: dict[str, Signature] = _sigs(
     ("DEFKEY", 1, None, "DEFKEY(...)"),
     ("CURSOR", 1, 1, "CURSOR(position)"),
     ("EPROM", 0, 0, "EPROM"),
-    ("POWER_UP", 0, 1, "POWER_UP"),
     ("COMPILE", 0, 0, "COMPILE"),
     ("SELECT", 0, 1, "SELECT \"program\""),
     ("LIST", 0, 1, "LIST"),
@@ -116,25 +116,28 @@ SETTINGS: dict[str, Signature] = _sigs(
     ("RENAME", 0, 2, "RENAME \"program\" \"new name\""),
     ("LOCK", 0, 1, "LOCK(code)"),
     ("UNLOCK", 0, 1, "UNLOCK(code)"),
-    ("DISPLAY", 0, 1, "DISPLAY = value"),
+    ("STORE", 0, 0, "STORE"),
+    ("EXECUTE", 1, None, "EXECUTE \"command\""),
+    ("INITIALISE", 0, 0, "INITIALISE"),
+    ("DIR", 0, 0, "DIR"),
     ("ENABLE_OP", 1, 1, "ENABLE_OP(mask)"),
     ("PSWITCH", 1, 7, "PSWITCH(switch, enable[, axis, output, state, set position, reset position])"),
     ("READPACKET", 1, None, "READPACKET(...)"),
     ("CHANNEL_WRITE", 1, None, "CHANNEL_WRITE(...)"),
+    ("CHANNEL_READ", 1, None, "CHANNEL_READ(channel, ...)"),
     ("FILE", 0, None, "FILE ..."),
     ("AOUT", 1, 2, "AOUT(channel, value)"),
-    ("AOUT0", 0, 1, "AOUT0 = value"),
-    ("AOUT1", 0, 1, "AOUT1 = value"),
     ("DISABLE_GROUP", 1, None, "DISABLE_GROUP(axis, ...)"),
     ("LOOKUP", 2, 2, "LOOKUP(format, entry)"),
     ("STEPLINE", 0, 2, "STEPLINE"),
     ("TROFF", 0, 1, "TROFF"),
     ("TRON", 0, 0, "TRON"),
-    ("FRAME", 0, 1, "FRAME = value"),
     ("SEND", 1, None, "SEND(...)"),
 )
 
-#: Motion commands of the manual without a model here: accepted, and an error naming the command when reached.
+#: Commands of the manual without a model here that move axes or switch outputs over time: accepted, and an
+#: error naming the command when reached (a motion or an output pulse the model would not make must not pass
+#: quietly).
 MOTION_NOT_MODELLED: dict[str, Signature] = _sigs(
     ("MHELICAL", 6, 8, "MHELICAL(end1, end2, centre1, centre2, direction, distance3[, ...])", True),
     ("MHELICALSP", 6, 8, "MHELICALSP(...)", True),
@@ -145,12 +148,14 @@ MOTION_NOT_MODELLED: dict[str, Signature] = _sigs(
     ("MOVECIRCSP", 5, 5, "MOVECIRCSP(...)", True),
     ("ADDAX", 1, 1, "ADDAX(axis)", True),
     ("ADD_DAC", 1, 1, "ADD_DAC(axis)", True),
-    ("REGIST_SPEED", 0, 0, "REGIST_SPEED", True),
     ("B_SPLINE", 4, 6, "B_SPLINE(...)", True),
     ("BACKLASH", 4, 4, "BACKLASH(on/off, distance, speed, accel)", True),
     ("ACC", 1, 1, "ACC(rate) (use ACCEL)", True),
     ("DEC", 1, 1, "DEC(rate) (use DECEL)", True),
     ("DLINK", 1, None, "DLINK(function, ...) (later firmware)", True),
+    ("TIMER", 4, 5, "TIMER(timer, output, pattern, time[, option])"),
+    ("RECORD", 1, None, "RECORD(...) (registration recording, later firmware)", True),
+    ("MATCH", 1, None, "MATCH(...) (registration matching, later firmware)", True),
 )
 
 #: Functions used in expressions (``NAME(args)``).
@@ -190,6 +195,14 @@ FUNCTIONS: dict[str, Signature] = _sigs(
     ("INSTR", 2, 3, "INSTR([start, ]string, search)"),
     ("AIN", 1, 1, "AIN(channel)"),
     ("MOTION_ERROR", 0, 0, "MOTION_ERROR"),
+    ("FLAGS", 0, 0, "FLAGS (all 32 flags as a number)"),
+    ("IEEE_IN", 4, 4, "IEEE_IN(byte0, byte1, byte2, byte3)"),
+    ("IEEE_OUT", 2, 2, "IEEE_OUT(value, byte 0..3)"),
+    # the inputs as numbers and the analogue channels by name (TRM 8-93, 8-103)
+    ("INPUTS0", 0, 0, "INPUTS0 (inputs 0..15 as a number)"),
+    ("INPUTS1", 0, 0, "INPUTS1 (inputs 16..31 as a number)"),
+    *((f"AIN{n}", 0, 0, f"AIN{n} (the same as AIN({n}))") for n in range(4)),
+    *((f"AINBI{n}", 0, 0, f"AINBI{n} (analogue input {n}, bipolar)") for n in range(4)),
 )
 
 #: Process parameters (``NAME`` or ``NAME PROC(n)``).
@@ -208,13 +221,22 @@ PROCESS_WRITABLE = frozenset({"TICKS", "INDEVICE", "OUTDEVICE"})
 #: System parameters besides :data:`SYSTEM_PARAMS` that are stored and listed as not modelled.
 SYSTEM_STORED: dict[str, int] = {"SCOPE_POS": 0, "LAST_AXIS": 3, "POS_OFFSET": 0, "NEG_OFFSET": 0,
                                  "ERROR_AXIS": -1, "SYSTEM_ERROR": 0, "VERSION": 0, "FREE": 47104,
-                                 "NIO": 32, "TSIZE": 16000, "CONTROL": 205, "D_ZONE": 0, "BATTERY_LOW": 0}
+                                 "NIO": 32, "TSIZE": 16000, "CONTROL": 205, "D_ZONE": 0, "BATTERY_LOW": 0,
+                                 "AOUT0": 0, "AOUT1": 0, "AOUT2": 0, "AOUT3": 0, "DISPLAY": 0, "FRAME": 0,
+                                 "POWER_UP": 0, "TIME": 0, "DATE": 0, "DAY": 0, "ADDRESS": 0, "LIMIT_BUFFERED": 1,
+                                 "CHECKSUM": 0, "COMMSERROR": 0, "COMMSTYPE": 0}
+#: Stored system parameters a program may write (``AOUT0 = 1000``: the analogue outputs, TRM 8-93; the
+#: display, the frame, the power-up mode, the clock, the network address, the buffered limit).
+SYSTEM_WRITABLE = frozenset({"AOUT0", "AOUT1", "AOUT2", "AOUT3", "DISPLAY", "FRAME", "POWER_UP", "TIME", "DATE",
+                             "DAY", "ADDRESS", "LIMIT_BUFFERED"})
+#: Functions of a channel (``KEY #1``).
+CHANNEL_FUNCTIONS = frozenset({"KEY"})
 
 #: Names a program can read as values.
 CONSTANTS: dict[str, int] = {"ON": ON, "OFF": OFF, "TRUE": TRUE, "FALSE": FALSE}
 READABLE = (frozenset(AXIS_PARAMS) | frozenset(READ_ONLY_AXIS_PARAMS) | frozenset(SYSTEM_PARAMS)
             | frozenset(PROCESS_PARAMS) | frozenset(SYSTEM_STORED) | {"PI"})
-WRITABLE = frozenset(AXIS_PARAMS) | {"WDOG"} | PROCESS_WRITABLE | {"OFFPOS"}
+WRITABLE = frozenset(AXIS_PARAMS) | {"WDOG"} | PROCESS_WRITABLE | {"OFFPOS"} | SYSTEM_WRITABLE
 
 #: Words of the grammar itself.
 STATEMENT_WORDS = frozenset({"AXIS", "PROC", "WAIT", "IDLE", "LOADED", "UNTIL", "REPEAT", "WHILE", "WEND", "FOR",
@@ -229,8 +251,69 @@ KEYWORDS = (frozenset(ALL_COMMANDS) | frozenset(FUNCTIONS) | READABLE | frozense
             | {"WDOG"})
 
 
+#: What a word of the grammar is, for a message when it stands where it cannot (``x = PROC``, ``MOD(7, 2)``).
+GRAMMAR_WORDS: dict[str, str] = {
+    "AXIS": "a modifier: write AXIS(n) after an axis command or parameter (MOVE(10) AXIS(2), UNITS AXIS(2) = 50)",
+    "PROC": "a modifier: write PROC(n) after a process parameter or command (TICKS PROC(2), PROC_STATUS PROC(3))",
+    "MOD": "an operator: write a MOD b (17 MOD 5 is 2)",
+    "AND": "an operator: write a AND b", "OR": "an operator: write a OR b", "XOR": "an operator: write a XOR b",
+    "NOT": "an operator: write NOT a",
+    **dict.fromkeys(("IF", "THEN", "ELSE", "ELSEIF", "ENDIF"), "a word of IF condition THEN ... [ELSE ...] ENDIF"),
+    **dict.fromkeys(("FOR", "TO", "STEP", "NEXT"), "a word of FOR v = a TO b [STEP c] ... NEXT v"),
+    **dict.fromkeys(("WHILE", "WEND"), "a word of WHILE condition ... WEND"),
+    "REPEAT": "a word of REPEAT ... UNTIL condition",
+    "UNTIL": "a word of REPEAT ... UNTIL condition and WAIT UNTIL condition",
+    "WAIT": "a statement: WAIT IDLE, WAIT LOADED or WAIT UNTIL condition",
+    "IDLE": "a word of WAIT IDLE (or a parameter read in an expression: IDLE AXIS(n))",
+    "LOADED": "a word of WAIT LOADED (or a parameter read in an expression: LOADED AXIS(n))",
+    **dict.fromkeys(("GOTO", "GOSUB"), "a statement: GOTO label / GOSUB label"),
+    "RETURN": "a statement: RETURN ends a GOSUB",
+    **dict.fromkeys(("PRINT", "INPUT", "GET", "LINPUT"), "a statement (PRINT [#channel,] items; INPUT [#channel,] "
+                                                         "variable; GET [#channel,] variable), not a value"),
+    **dict.fromkeys(("DIM", "AS"), "a word of DIM name[(size)] [AS type]"),
+    "CONSTANT": "a statement: CONSTANT \"name\", value",
+    "GLOBAL": "a statement: GLOBAL \"name\", vr index",
+    "INCLUDE": "a statement: INCLUDE \"program\"",
+    "BASICERROR": "a word of ON BASICERROR GOTO label",
+    "REM": "a comment: REM text",
+}
+
+
+_CLOSES = {"ENDIF": "IF", "NEXT": "FOR", "WEND": "WHILE", "UNTIL": "REPEAT"}
+_AS_WHAT = {"command": "a command", "channel": "a command", "function": "a function", "value": "a value",
+            "assignment": "the target of an assignment"}
+
+
+def misplaced(name: str, where: str) -> str | None:
+    """Message for a keyword standing where it cannot (``where``: command, function, value, assignment), if it is one.
+
+    Examples
+    --------
+    >>> misplaced("MOD", "value")
+    'MOD is an operator: write a MOD b (17 MOD 5 is 2); it cannot stand as a value'
+    """
+    upper = name.upper()
+    opener = _CLOSES.get(upper)
+    if opener is not None and where in ("command", "channel"):
+        article = "an" if opener == "IF" else "a"
+        return f"{upper} closes {article} {opener} block, but no {opener} block is open here"
+    if upper in GRAMMAR_WORDS:
+        return f"{upper} is {GRAMMAR_WORDS[upper]}; it cannot stand as {_AS_WHAT.get(where, where)}"
+    if where in ("command", "channel") and upper in READABLE:
+        if upper in WRITABLE:
+            return f"{upper} is a parameter; write {upper} = value (a parameter is not a command)"
+        return f"{upper} is a read-only parameter; read it in an expression (x = {upper})"
+    if where in ("command", "channel") and upper in FUNCTIONS:
+        return f"{upper}(...) is a function, not a command; use it in an expression"
+    if where == "assignment" and (upper in ALL_COMMANDS or upper in FUNCTIONS):
+        kind = "a command" if upper in ALL_COMMANDS else "a function"
+        usage = (ALL_COMMANDS.get(upper) or FUNCTIONS[upper]).usage
+        return f"{upper} is {kind}, not a parameter: write {usage}"
+    return None
+
+
 def _close(name: str, known: frozenset[str] | list[str]) -> str:
-    close = difflib.get_close_matches(name.upper(), sorted(known), n=3)
+    close = [c for c in difflib.get_close_matches(name.upper(), sorted(known), n=4) if c != name.upper()][:3]
     return f"; did you mean {', '.join(close)}?" if close else ""
 
 

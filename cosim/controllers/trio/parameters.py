@@ -20,6 +20,7 @@ from cosim.controllers.trio.params import (
     AXIS_PARAMS,
     PWM_AXES,
     PWM_ENCODER_MODULUS,
+    READ_NOT_MODELLED,
     READ_ONLY_AXIS_PARAMS,
     SYSTEM_PARAMS,
     on_off,
@@ -132,6 +133,9 @@ class ParameterAccess:
             if AXIS_PARAMS[key].pwm_only and not ax.has_pwm:
                 raise ConfigurationError.out_of_range(f"axis of {key}", ax.number, pwm_axes())
             return Fraction(ax.params[key])
+        if key in READ_NOT_MODELLED:
+            self.sim.notes.not_modelled(self.device, f"{key}(axis {ax.number}) read", READ_NOT_MODELLED[key])
+            return Fraction(READ_NOT_MODELLED[key])
         now = self.sim.now
         values: dict[str, Any] = {
             "DPOS": lambda: ax.dpos, "MPOS": lambda: ax.mpos_at(now), "VP_SPEED": lambda: ax.vp_speed,
@@ -146,7 +150,7 @@ class ParameterAccess:
             "DEMAND_EDGES": lambda: ax.demand, "ENCODER": lambda: ax.steps,
             "LINKAX": lambda: getattr(ax.current, "link", -1) if ax.current is not None else -1,
             "MOVES_BUFFERED": lambda: (ax.current is not None) + (ax.queued is not None),
-            "DRIVE_STATUS": lambda: 0,
+            "DRIVE_STATUS": lambda: 0, "TRANS_DPOS": lambda: ax.dpos,
         }
         if key not in values:
             raise ConfigurationError(unknown_name(key))

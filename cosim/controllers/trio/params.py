@@ -216,7 +216,9 @@ AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
         ("FE_RANGE", 0, "units", "following error warning range"), ("CLUTCH_RATE", 0, "", "CONNECT ratio rate"),
         ("BACKLASH_DIST", 0, "units", "backlash"), ("S_REF", 0, "", "speed reference (open loop)"),
         ("T_REF", 0, "", "torque reference"), ("ENDMOVE", 0, "units", "end of the current move"),
-        ("ENCODER_RATIO", 1, "", "encoder scaling"), ("STEP_RATIO", 1, "", "step output scaling"))),
+        ("ENCODER_RATIO", 1, "", "MPOS per encoder edge (ENCODER_RATIO(denominator, numerator))"),
+        ("STEP_RATIO", 1, "", "step pulses per demand count (STEP_RATIO(denominator, numerator))"),
+        ("REGIST_SPEED", 0, "units/s", "registration speed"))),
     *(_P(name, default, allowed, conv, "", doc, acts=False) for name, default, allowed, conv, doc in (
         ("FHOLD_IN", -1, "-1 or an input", _input_channel, "feedhold input"),
         ("AXIS_ENABLE", 1, "ON/OFF", _flag, "axis enable"), ("VERIFY", 0, "ON/OFF", _flag, "step verification"),
@@ -225,7 +227,11 @@ AXIS_PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
         ("ENCODER_BITS", 0, "0..255", _whole(0, 255), "absolute encoder bits"),
         ("ENCODER_CONTROL", 0, "0..255", _whole(0, 255), "absolute encoder mode"),
         ("PP_STEP", 0, "-1024..1023", _whole(-1024, 1023), "pulses per step of a verifying stepper"),
-        ("ERRORMASK", 268, "0..65535", _whole(0, 65535), "AXISSTATUS bits that are motion errors"))),
+        ("ERRORMASK", 268, "0..65535", _whole(0, 65535), "AXISSTATUS bits that are motion errors"),
+        ("SSI_BITS", 0, "0..31", _whole(0, 31), "bits of an SSI absolute encoder"),
+        ("MICROSTEP", 0, "ON/OFF", _flag, "microstepping (internal counts doubled)"),
+        ("DRIVE_CONTROL", 0, "a whole number", _whole(None, None), "what a digital drive reports"),
+        ("AXIS_MODE", 0, "a whole number >= 0", _whole(0, None), "axis mode bits (later firmware)"))),
 )}
 
 #: Axis parameters that can only be read (computed by the model).
@@ -253,7 +259,22 @@ READ_ONLY_AXIS_PARAMS: dict[str, str] = {
     "MOVES_BUFFERED": "moves running or buffered on the axis",
     "DRIVE_STATUS": "drive status register (0: no drive with digital communications)",
     "ENCODER": "raw encoder count (the step count of a stepper)",
+    "TRANS_DPOS": "demand position after the frame transformation (1:1 here: DPOS) [units]",
+    # read back as a fixed value and listed as "read, not modelled" (see READ_NOT_MODELLED)
+    "MARKB": "TRUE (-1) once the second registration channel captured (not modelled: FALSE)",
+    "REG_POSB": "position latched by the second registration channel (not modelled: 0) [units]",
+    "TRANSITIONS": "registration input transitions of a REGIST sequence (not modelled: 0)",
+    "ENCODER_STATUS": "status of an absolute encoder (not modelled: 0)",
+    "ENCODER_TYPE": "type of an absolute encoder (not modelled: 0)",
+    "ENCODER_ID": "identity of an absolute encoder (not modelled: 0)",
+    "FE_LATCH": "the following error that stopped the axis (not modelled: 0) [units]",
+    "S_REF_OUT": "the speed reference sent to the drive (not modelled: 0)",
+    "ADDAX_AXIS": "the axis an ADDAX superimposes (-1: none; ADDAX is not modelled)",
 }
+#: Read-only axis parameters read as a fixed value: each read is listed as "not modelled".
+READ_NOT_MODELLED: dict[str, int] = {"MARKB": 0, "REG_POSB": 0, "TRANSITIONS": 0, "ENCODER_STATUS": 0,
+                                     "ENCODER_TYPE": 0, "ENCODER_ID": 0, "FE_LATCH": 0, "S_REF_OUT": 0,
+                                     "ADDAX_AXIS": -1}
 
 #: Controller-wide parameters.
 SYSTEM_PARAMS: dict[str, str] = {

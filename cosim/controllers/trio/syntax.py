@@ -7,6 +7,8 @@ what was found and what was expected, and the line itself.
 
 from __future__ import annotations
 
+import re
+
 from lark import Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
@@ -31,7 +33,77 @@ def _expected(exc: UnexpectedInput) -> str:
     return f" (expected: {', '.join(shown)})" if shown else ""
 
 
+#: The blocks of Trio BASIC: the word that opens one, the word that closes it, and how it is written.
+BLOCKS = {"IF": ("ENDIF", "IF condition THEN ... ENDIF"), "FOR": ("NEXT", "FOR v = a TO b ... NEXT"),
+          "WHILE": ("WEND", "WHILE condition ... WEND"), "REPEAT": ("UNTIL", "REPEAT ... UNTIL condition")}
+_CLOSERS = {closer: opener for opener, (closer, _usage) in BLOCKS.items()}
+_STRING_OR_COMMENT = re.compile(r'"[^"\n]*"|\'.*$|(?<![A-Za-z0-9_])REM(?![A-Za-z0-9_]).*$', re.IGNORECASE)
+
+
+def open_blocks(text: str, *, until_line: int | None = None) -> list[tuple[str, int]]:
+    """The blocks still open (innermost last) after line ``until_line`` - 1 of ``text`` (all lines by default).
+
+    A line-by-line scan of the block words (a one-line ``IF ... THEN statement`` opens nothing), used to
+    say which block a syntax error at a closing word or at the end of the program leaves open.
+
+    Examples
+    --------
+    >>> open_blocks("FOR i = 1 TO 3\nIF i = 2 THEN\nx = 1\nNEXT i\n")
+    [('FOR', 1), ('IF', 2)]
+    """
+    stack: list[tuple[str, int]] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        if until_line is not None and number >= until_line:
+            break
+        for statement in _STRING_OR_COMMENT.sub(" ", raw).split(":"):
+            words = statement.split()
+            if not words:
+                continue
+            first = words[0].upper()
+            if (first == "IF" and words[-1].upper() == "THEN") or first in ("FOR", "WHILE", "REPEAT"):
+                stack.append((first, number))
+            elif first in _CLOSERS:
+                for k in range(len(stack) - 1, -1, -1):
+                    if stack[k][0] == _CLOSERS[first]:
+                        del stack[k:]
+                        break
+    return stack
+
+
+def _a(word: str) -> str:
+    return f"an {word}" if word == "IF" else f"a {word}"
+
+
+def _unclosed(exc: UnexpectedInput, text: str, name: str) -> str | None:
+    """The message for an error at the end of the program or at a closing word that leaves a block open."""
+    if not isinstance(exc, UnexpectedToken):
+        return None
+    word = str(exc.token).upper()
+    at_end = exc.token.type == "$END"
+    if not at_end and word not in _CLOSERS:
+        return None
+    stack = open_blocks(text, until_line=None if at_end else exc.line)
+    if not at_end and all(opened != _CLOSERS[word] for opened, _line in stack):
+        wanted = _CLOSERS[word]
+        return (f"{name} line {exc.line}, column {exc.column}: {word} closes {_a(wanted)} block, but no {wanted} "
+                f"block is open here ({BLOCKS[wanted][1]})")
+    if not stack:
+        return None
+    opener, line = stack[-1]
+    closer, usage = BLOCKS[opener]
+    if at_end:
+        return (f"{name} line {line}: the {opener} block that starts here is not closed: {closer} is missing before "
+                f"the end of the program ({usage})")
+    if _CLOSERS[word] == opener:
+        return None
+    return (f"{name} line {exc.line}, column {exc.column}: {word} closes {_a(_CLOSERS[word])} block, but the {opener} "
+            f"block of line {line} is not closed yet: {closer} is missing ({usage})")
+
+
 def _syntax_message(exc: UnexpectedInput, text: str, name: str) -> str:
+    unclosed = _unclosed(exc, text, name)
+    if unclosed is not None:
+        return unclosed
     lines = text.splitlines()
     line, column = exc.line, exc.column
     source = lines[line - 1] if 1 <= line <= len(lines) else ""

@@ -141,15 +141,48 @@ class TrioFamily:
                     controller.axes[int(number)].ensure_z_mark()
         for table in document.tables("channel"):
             self._channel(run, controller, table)
+        self._figures(run, controller)
+
+    def _figures(self, run: Run, controller: TrioController) -> None:
+        """``axisN_step_pulses`` and ``axisN_late_positions`` of the axes the machine and its programs use.
+
+        Declared before the run for the axes that have a step output (axes 2 and 3, a coupled axis, an
+        axis made a stepper in ``[controller.axis.N]``), so ``check-machine`` lists them; after the run, those
+        of an axis that never became a stepper nor stepped are dropped, and those of an axis a program made
+        a stepper are added: the figures follow the axes used, not the family's defaults.
+        """
         sim = run.sim
-        for n, axis in controller.axes.items():
+
+        def declare(n: int) -> None:
+            axis = controller.axes[n]
             if axis.step is not None:
                 step = axis.step
-                run.figure(f"axis{n}_step_pulses", lambda step=step: float(sum(  # type: ignore[misc]
-                    sim.trace.segments(step.name)["count"])))
+                run.figure(f"axis{n}_step_pulses", lambda: float(sum(sim.trace.segments(step.name)["count"])),
+                           where=f"the Trio family: axis {n}")
             if axis.gate is not None:
                 gate = axis.gate
-                run.figure(f"axis{n}_late_positions", lambda gate=gate: float(len(gate.late)))  # type: ignore[misc]
+                run.figure(f"axis{n}_late_positions", lambda: float(len(gate.late)), where=f"the Trio family: axis {n}")
+
+        declared = [n for n, axis in controller.axes.items() if axis.step is not None]
+        for n in declared:
+            declare(n)
+
+        def used(n: int) -> bool:
+            axis = controller.axes[n]
+            return axis.step is not None and (axis.stepper or bool((sim.trace.segments(axis.step.name)["count"] != 0)
+                                                                   .any()))
+
+        def follow_the_axes_used() -> None:
+            for n in declared:
+                if not used(n):
+                    for name in (f"axis{n}_step_pulses", f"axis{n}_late_positions"):
+                        run.figures.pop(name, None)
+                        run.figure_declared.pop(name, None)
+            for n in controller.axes:
+                if n not in declared and used(n):
+                    declare(n)
+
+        run.afterwards(follow_the_axes_used)
 
     def _channel(self, run: Run, controller: TrioController, table: Table) -> None:
         """``[[channel]] channel = n, at = [...], text = [...]``: characters fed to a channel at those instants."""
