@@ -638,6 +638,24 @@ class Fmu:
         return BlockSampler(self, [(getters[function], [variables[i] for i in indices],
                                     [sinks[i] for i in indices]) for function, indices in groups.items()], rows=rows)
 
+    def grid_row(self, block: BlockSampler) -> Any:
+        """A :class:`cosim.gridloop.GridRow` stepping this FMU over grid instants and sampling into ``block`` in C,
+        or None where the C loop is not available (no C compiler, a resolution that is not 1/n s, no direct
+        access to the FMU's functions): the master then steps in Python, with the same results."""
+        from cosim import gridloop
+
+        resolution = self.timebase.resolution_s
+        do_step = self._raw(f"fmi{self.fmi_version}DoStep")
+        if resolution.numerator != 1 or do_step is None or block.fmu is not self:
+            return None
+        lib = gridloop.library()
+        if lib is None:
+            return None
+        getters = [(_address(get), head[1], head[2].value, base, stride)
+                   for get, head, base, stride, _ in block._groups]
+        return gridloop.GridRow(lib, self, block, do_step=_address(do_step), per_second=resolution.denominator,
+                                getters=getters)
+
     def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
         """A function setting ``names`` (all Float64/Real scalar inputs) to its argument's values in one FMI call.
 
@@ -940,6 +958,11 @@ class BlockSampler:
         for block, sinks in self._blocks:
             for j, sink in enumerate(sinks):
                 sink(times, block[:n, j].copy())
+
+
+def _address(function: Any) -> int:
+    """The address of a loaded C function."""
+    return int(ctypes.cast(function, ctypes.c_void_p).value or 0)
 
 
 def _put(values: list[Any], i: int, t: int, value: Any) -> None:
