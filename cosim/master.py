@@ -161,7 +161,8 @@ class Plant:
         now = self.sim.now
         if self.fmu.t != now and self.fmu.terminated is None:
             self._advance_to(now)
-            self._check_watched(now)
+            if self._watched:
+                self._check_watched(now)
 
     def advance_ahead(self, t: int) -> None:
         """Bring the FMU to tick ``t`` at or after now, for a coupling acting on a run of segments.
@@ -216,11 +217,19 @@ class Plant:
         if var.causality not in ("input", "parameter"):
             raise ConfigurationError(f"{self.name}.{variable} is an {var.causality}, not an input")
         to_fmu = convert or (lambda v: v)
+        fmu = self.fmu
+        # a float for a Float64 scalar needs no check (Variable.check would return it as it is): its prepared setter
+        checked = not (var.kind.name == "Float64" and not var.shape)
 
         def on_change(sig: Signal) -> None:
             self.advance()
-            self.fmu.set(variable, to_fmu(sig.value))
-            self._sample_soon(self.sim.now)
+            value = to_fmu(sig.value)
+            if checked or type(value) is not float:
+                fmu.set(variable, value)
+            else:
+                var.set(value)
+            if self._samplers:
+                self._sample_soon(self.sim.now)
 
         self.fmu.set(variable, to_fmu(signal.value))
         signal.subscribe(on_change)
