@@ -993,12 +993,12 @@ def _load_functions(fmu: Any, load: Callable[[], None]) -> None:
 
 
 # (fmpy tells the FMI version from the class name's start: FMU2..., FMU3...)
-class FMU2SlaveOnce(FMU2Slave):  # type: ignore[misc]
+class FMU2SlaveOnce(FMU2Slave):
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 
 
-class FMU3SlaveOnce(FMU3Slave):  # type: ignore[misc]
+class FMU3SlaveOnce(FMU3Slave):
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 

@@ -338,3 +338,34 @@ def test_rows_in_c_stop_where_the_plant_needs_more_than_a_sample_as_the_python_l
         assert ended_c is not None and f"terminated at t={int(parameters[name] * 1000)}000000 ticks" in ended_c
     if name == "error_time":
         assert ended_c is not None and ended_c.startswith("FmuError") and "failed with status Error" in ended_c
+
+
+def test_without_a_c_compiler_or_with_a_failing_one_the_python_loop_runs_and_the_build_is_not_retried(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """No compiler on PATH: no C loop (the grid is stepped in Python, same samples). A compiler that fails: the
+    failure is kept beside the library's name (``.failed``, its message) and not tried again on the next run."""
+    from cosim import gridloop
+
+    monkeypatch.setenv("COSIM_FMU_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("PATH", str(tmp_path / "nothing"))
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    samples, steps, ended, rows = grid_run("TypesTest", 3, {"speed": 1.0}, outputs=["position"], period=100 * MS,
+                                           until=300 * MS, python_loop=False, monkeypatch=monkeypatch)
+    assert samples["position"][0] == [0, 100 * MS, 200 * MS, 300 * MS]
+    assert (steps, ended, rows) == (3, None, 0)
+
+    monkeypatch.undo()
+    monkeypatch.setenv("COSIM_FMU_CACHE", str(tmp_path / "cache"))
+    broken = tmp_path / "gridloop.c"
+    broken.write_text("this is not C\n")
+    monkeypatch.setattr(gridloop, "SOURCE", broken)
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    failed = list((tmp_path / "cache").glob("gridloop-*.failed"))
+    assert len(failed) == 1 and b"error" in failed[0].read_bytes()
+    calls = []
+    monkeypatch.setattr("subprocess.run", lambda *args, **kwargs: calls.append(args))
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    assert calls == []  # not compiled again
