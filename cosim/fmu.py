@@ -341,8 +341,14 @@ class Fmu:
 
     def _accessors(self, var: Variable) -> tuple[Callable[[], Value], Callable[[Any], None]]:
         prefix = f"fmi{self.fmi_version}"
-        return accessors(var, self._function(f"{prefix}Get{var.kind.function}"),
-                         self._function(f"{prefix}Set{var.kind.function}"), component=self._fmu.component,
+        get, put = f"{prefix}Get{var.kind.function}", f"{prefix}Set{var.kind.function}"
+        if var.kind.name != "Binary" and not var.shape and var.kind.python is not str:
+            # numbers and Booleans: the functions without argtypes, given ctypes objects of the exact C types
+            bare_get, bare_put = self._bare(get), self._bare(put)
+            if bare_get is not None and bare_put is not None:
+                return accessors(var, bare_get, bare_put, component=self._fmu.component, fmi3=self.fmi_version == 3,
+                                 failed=self._failed)
+        return accessors(var, self._function(get), self._function(put), component=self._fmu.component,
                          fmi3=self.fmi_version == 3, failed=self._failed)
 
     def _initialise(self, parameters: dict[str, Any]) -> None:
