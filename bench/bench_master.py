@@ -10,19 +10,22 @@ Both importers run the same FMU on the same fixed output grid and record the sam
 of them, as ``cosim run-fmu`` does): fmpy's ``simulate_fmu(output_interval=...)``, and cosim's
 master as ``run-fmu`` drives it (``Plant.record(at_events=False)``: the grid alone). The figure is
 process CPU time per step, start-up cancelled: (cost of N steps - cost of N/10 steps) / (0.9 N).
-Each is measured ``--repeat`` times (min / median / max), alternating the two importers; the
-ratio is taken run by run. Beside them, the C alone: the same doSteps and one getter call per type
-through ctypes with arguments made once, nothing recorded (no Python importer can go below it);
-"above it" compares what each importer adds to that C (cosim's master against fmpy's loop).
-The values of both are compared (the same FMU must give the same outputs; BouncingBall would
-differ near a bounce, which cosim locates with early return and fmpy at the next grid point).
+Each is measured ``--repeat`` times (min / median / max), alternating the importers; the ratio is
+taken run by run. cosim steps and samples rows of grid instants in C where a C compiler is at hand
+(``cosim.gridloop``); its Python loop (what runs without a compiler) is measured beside it, and the
+two must give identical samples. Also shown: the same doSteps and one getter call per type through
+ctypes with arguments made once, nothing recorded (what a Python loop cannot go below: the C loop
+does, as it makes no ctypes call per step). The values of cosim and fmpy are compared (the same FMU
+must give the same outputs; BouncingBall would differ near a bounce, which cosim locates with early
+return and fmpy at the next grid point).
 
-Start-up: ``cosim run-fmu`` on Dahlquist for its default experiment (101 steps) in a fresh
-interpreter, CPU time of the child process (target < 0.4 s).
+Start-up: ``cosim run-fmu`` and fmpy's ``simulate_fmu`` on Dahlquist (101 steps) and the Servo
+(their default experiments), each in a fresh interpreter, CPU time of the child process (target
+< 0.4 s), byte code compiled and the FMU cache filled as in a user's second run.
 
 Run::
 
-    .venv/bin/python bench/bench_master.py [--steps N] [--fmi 2|3] [--repeat 3]
+    .venv/bin/python bench/bench_master.py [--steps N] [--fmi 2|3] [--repeat 3] [--only Servo] [--no-extras]
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ import numpy as np
 from clock import machine_load, measure, spread
 from fmpy import simulate_fmu
 
+from cosim import gridloop
 from cosim.fmu import Fmu
 from cosim.fmubuild import CHECKOUT, MODELS_DIR, SOURCE_DIR, ensure_fmu
 from cosim.kernel import Simulation
@@ -105,6 +109,16 @@ def run_cosim(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.n
     return lap.cpu_s, values
 
 
+def run_cosim_python(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
+    """cosim's master with its Python loop (no C compiler at hand: ``cosim.gridloop`` unavailable)."""
+    kept = list(gridloop._LOADED)
+    gridloop._LOADED[:] = [None]
+    try:
+        return run_cosim(path, case, steps)
+    finally:
+        gridloop._LOADED[:] = kept
+
+
 def run_floor(path: Path, case: Case, steps: int) -> tuple[float, dict[str, np.ndarray]]:
     """The C the importers call, and nothing else: each step one doStep and one getter call per type, made
     with ctypes arguments prepared once (no recording, no checks): what no Python importer can go below."""
@@ -148,16 +162,25 @@ def per_step(run: object, path: Path, case: Case, steps: int) -> tuple[float, di
     return (long_s - short_s) / (steps - steps // 10), values
 
 
-def startup(path: Path, repeat: int) -> list[float]:
-    """CPU seconds of ``cosim run-fmu`` in a fresh interpreter (the child's user + system time)."""
-    laps = []
+def startup(path: Path, repeat: int) -> tuple[list[float], list[float]]:
+    """CPU seconds of ``cosim run-fmu`` and of fmpy's ``simulate_fmu`` on the FMU's default experiment, each in a
+    fresh interpreter (the child's user + system time), alternating.
+
+    Both as a user has them: byte code compiled (a first run, not measured, writes cosim's ``.pyc`` files where
+    ``PYTHONDONTWRITEBYTECODE`` kept them from being written; an installed package has them from its
+    installation), the FMU in cosim's per-user cache and the C grid loop built (both once per user)."""
+    cosim_laps, fmpy_laps = [], []
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     with tempfile.TemporaryDirectory(prefix="cosim-bench-") as tmp:
+        cosim = [sys.executable, "-m", "cosim", "run-fmu", str(path), "--out", str(Path(tmp) / "out")]
+        fmpy = [sys.executable, "-c", f"from fmpy import simulate_fmu; simulate_fmu({str(path)!r})"]
+        subprocess.run(cosim, check=True, stdout=subprocess.DEVNULL, env=env)
         for _ in range(repeat):
-            with measure(children=True) as lap:
-                subprocess.run([sys.executable, "-m", "cosim", "run-fmu", str(path), "--out", str(Path(tmp) / "out")],
-                               check=True, stdout=subprocess.DEVNULL)
-            laps.append(lap.cpu_s)
-    return laps
+            for command, laps in ((cosim, cosim_laps), (fmpy, fmpy_laps)):
+                with measure(children=True) as lap:
+                    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, env=env)
+                laps.append(lap.cpu_s)
+    return cosim_laps, fmpy_laps
 
 
 def laser_samples(repeat: int) -> None:
@@ -188,35 +211,48 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=20_000, help="communication steps of the long run")
     parser.add_argument("--fmi", type=int, choices=(2, 3), default=3)
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3: min/median/max)")
+    parser.add_argument("--only", nargs="*", choices=[case.name for case in CASES], help="these FMUs only")
+    parser.add_argument("--no-extras", action="store_true", help="per-step figures only (no Laser, no start-up)")
     args = parser.parse_args()
     paths = bench_fmus(args.fmi)
-    print(f"machine: {machine_load()}")
+    print(f"machine: {machine_load()}; C grid loop: {'built' if gridloop.library() is not None else 'NOT available'}")
     print(f"FMI {args.fmi}.0, {args.steps} steps minus {args.steps // 10}, {args.repeat} runs each; CPU us per step "
           "(min / median / max), with recording")
     for case in CASES:
+        if args.only and case.name not in args.only:
+            continue
         path = paths[case.name]
         run_fmpy(path, case, 200)  # warm up (loading, caches)
         run_cosim(path, case, 200)
-        fmpy_us, cosim_us, floor_us, ratios, above = [], [], [], [], []
+        fmpy_us, cosim_us, python_us, floor_us, ratios, python_ratios = [], [], [], [], [], []
         for _ in range(args.repeat):
             c_floor, _ = per_step(run_floor, path, case, args.steps)
             f, fmpy_values = per_step(run_fmpy, path, case, args.steps)
             c, cosim_values = per_step(run_cosim, path, case, args.steps)
+            p, python_values = per_step(run_cosim_python, path, case, args.steps)
             floor_us.append(c_floor * 1e6)
             fmpy_us.append(f * 1e6)
             cosim_us.append(c * 1e6)
+            python_us.append(p * 1e6)
             ratios.append(c / f)
-            above.append((c - c_floor) / (f - c_floor))
+            python_ratios.append(p / f)
         worst = max(float(np.max(np.abs(fmpy_values[n] - cosim_values[n]))) for n in case.outputs)
+        same = all(cosim_values[n].tobytes() == python_values[n].tobytes() for n in case.outputs)
         ok = "ok" if max(ratios) <= case.target else "NOT MET"
         print(f"  {case.name:<12} every {case.step_ns / 1e6:g} ms: fmpy {spread(fmpy_us, '{:.2f}')}  cosim "
               f"{spread(cosim_us, '{:.2f}')}  ratio {spread(ratios, '{:.2f}')} (target <= {case.target}: {ok})")
-        print(f"  {'':<12} the C alone (doStep + getters) {spread(floor_us, '{:.2f}')}; above it, cosim/fmpy "
-              f"{spread(above, '{:.2f}')}; largest difference of the values {worst:.3g}")
+        print(f"  {'':<12} cosim's Python loop (no C compiler) {spread(python_us, '{:.2f}')}, ratio "
+              f"{spread(python_ratios, '{:.2f}')}; the C loop's samples {'identical' if same else 'DIFFER'}")
+        print(f"  {'':<12} doStep + getters through ctypes, nothing else {spread(floor_us, '{:.2f}')}; largest "
+              f"difference of the values cosim - fmpy {worst:.3g}")
+    if args.no_extras:
+        return
     laser_samples(args.repeat)
-    laps = startup(paths["Dahlquist"], args.repeat)
-    print(f"  run-fmu start-up (Dahlquist, 101 steps, fresh interpreter): CPU {spread(laps, '{:.3f}')} s "
-          f"(target < 0.4 s: {'ok' if max(laps) < 0.4 else 'NOT MET'})")
+    for name in ("Dahlquist", "Servo"):
+        laps, fmpy_laps = startup(paths[name], args.repeat)
+        print(f"  start-up, default experiment in a fresh interpreter, {name:<9}: cosim run-fmu CPU "
+              f"{spread(laps, '{:.3f}')} s (target < 0.4 s: {'ok' if max(laps) < 0.4 else 'NOT MET'}); fmpy "
+              f"simulate_fmu {spread(fmpy_laps, '{:.3f}')} s")
 
 
 if __name__ == "__main__":

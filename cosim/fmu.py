@@ -341,8 +341,14 @@ class Fmu:
 
     def _accessors(self, var: Variable) -> tuple[Callable[[], Value], Callable[[Any], None]]:
         prefix = f"fmi{self.fmi_version}"
-        return accessors(var, self._function(f"{prefix}Get{var.kind.function}"),
-                         self._function(f"{prefix}Set{var.kind.function}"), component=self._fmu.component,
+        get, put = f"{prefix}Get{var.kind.function}", f"{prefix}Set{var.kind.function}"
+        if var.kind.name != "Binary" and not var.shape and var.kind.python is not str:
+            # numbers and Booleans: the functions without argtypes, given ctypes objects of the exact C types
+            bare_get, bare_put = self._bare(get), self._bare(put)
+            if bare_get is not None and bare_put is not None:
+                return accessors(var, bare_get, bare_put, component=self._fmu.component, fmi3=self.fmi_version == 3,
+                                 failed=self._failed)
+        return accessors(var, self._function(get), self._function(put), component=self._fmu.component,
                          fmi3=self.fmi_version == 3, failed=self._failed)
 
     def _initialise(self, parameters: dict[str, Any]) -> None:
@@ -637,6 +643,24 @@ class Fmu:
             return None
         return BlockSampler(self, [(getters[function], [variables[i] for i in indices],
                                     [sinks[i] for i in indices]) for function, indices in groups.items()], rows=rows)
+
+    def grid_row(self, block: BlockSampler) -> Any:
+        """A :class:`cosim.gridloop.GridRow` stepping this FMU over grid instants and sampling into ``block`` in C,
+        or None where the C loop is not available (no C compiler, a resolution that is not 1/n s, no direct
+        access to the FMU's functions): the master then steps in Python, with the same results."""
+        from cosim import gridloop
+
+        resolution = self.timebase.resolution_s
+        do_step = self._raw(f"fmi{self.fmi_version}DoStep")
+        if resolution.numerator != 1 or do_step is None or block.fmu is not self:
+            return None
+        lib = gridloop.library()
+        if lib is None:
+            return None
+        getters = [(_address(get), head[1], head[2].value, base, stride)
+                   for get, head, base, stride, _ in block._groups]
+        return gridloop.GridRow(lib, self, block, do_step=_address(do_step), per_second=resolution.denominator,
+                                getters=getters)
 
     def writer(self, names: list[str]) -> Callable[[Sequence[float]], None]:
         """A function setting ``names`` (all Float64/Real scalar inputs) to its argument's values in one FMI call.
@@ -942,6 +966,11 @@ class BlockSampler:
                 sink(times, block[:n, j].copy())
 
 
+def _address(function: Any) -> int:
+    """The address of a loaded C function."""
+    return int(ctypes.cast(function, ctypes.c_void_p).value or 0)
+
+
 def _put(values: list[Any], i: int, t: int, value: Any) -> None:
     values[i] = value
 
@@ -970,12 +999,12 @@ def _load_functions(fmu: Any, load: Callable[[], None]) -> None:
 
 
 # (fmpy tells the FMI version from the class name's start: FMU2..., FMU3...)
-class FMU2SlaveOnce(FMU2Slave):  # type: ignore[misc]
+class FMU2SlaveOnce(FMU2Slave):
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 
 
-class FMU3SlaveOnce(FMU3Slave):  # type: ignore[misc]
+class FMU3SlaveOnce(FMU3Slave):
     def _loadFunctions(self) -> None:
         _load_functions(self, super()._loadFunctions)
 

@@ -350,14 +350,20 @@ def accessors(var: Variable, get_fn: Status, set_fn: Status, *, component: Any, 
         return get_elements, put_elements
 
     convert = kind.python
+    # a scalar's call with ctypes arguments made once (the hot path of reads and driven inputs)
+    args = (ctypes.c_void_p(component), vrs, ctypes.c_size_t(1), buffer, *((ctypes.c_size_t(n),) if fmi3 else ()))
 
     def get_scalar() -> Value:
-        call(get_fn, f"get {name}")
+        status = get_fn(*args)
+        if status > 1:
+            raise failed(f"get {name}", status)
         return convert(buffer[0])
 
     def put_scalar(value: Any) -> None:
         buffer[0] = value
-        call(set_fn, f"set {name} = {value!r}")
+        status = set_fn(*args)
+        if status > 1:
+            raise failed(f"set {name} = {value!r}", status)
 
     return get_scalar, put_scalar
 

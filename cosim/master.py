@@ -28,7 +28,9 @@ energy): then the samples ride inside the steps the plant makes anyway, bit-iden
 The calls are prepared once: a step is one ctypes call with arguments made at load
 (:meth:`cosim.fmu.Fmu.stepper`), a sample one getter call per FMI type; samples taken in a row,
 with nothing else due between them, are read into numpy blocks and handed to the trace when the
-row ends (:class:`cosim.fmu.BlockSampler`).
+row ends (:class:`cosim.fmu.BlockSampler`). Such a row is stepped and read in C where a C compiler
+is at hand (:mod:`cosim.gridloop`: one call from Python per row of up to a block of samples, the
+same FMI calls with the same arguments, so the same values); elsewhere in Python.
 
 Every FMI variable type can be read and set (:mod:`cosim.fmuvars`: arrays as numpy arrays);
 numeric and Boolean outputs can be recorded (an array as one trace signal per element,
@@ -44,6 +46,7 @@ scenarios use of a plant. :class:`Plant` (an FMU) and the analytic plants of
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from pathlib import Path
@@ -51,7 +54,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from cosim import sampleschedule
+from cosim import gridloop, sampleschedule
 from cosim.errors import ConfigurationError, PlantTerminated
 from cosim.fmu import Fmu, Value
 from cosim.fmuvars import trace_names
@@ -158,7 +161,8 @@ class Plant:
         now = self.sim.now
         if self.fmu.t != now and self.fmu.terminated is None:
             self._advance_to(now)
-            self._check_watched(now)
+            if self._watched:
+                self._check_watched(now)
 
     def advance_ahead(self, t: int) -> None:
         """Bring the FMU to tick ``t`` at or after now, for a coupling acting on a run of segments.
@@ -213,11 +217,19 @@ class Plant:
         if var.causality not in ("input", "parameter"):
             raise ConfigurationError(f"{self.name}.{variable} is an {var.causality}, not an input")
         to_fmu = convert or (lambda v: v)
+        fmu = self.fmu
+        # a float for a Float64 scalar needs no check (Variable.check would return it as it is): its prepared setter
+        checked = not (var.kind.name == "Float64" and not var.shape)
 
         def on_change(sig: Signal) -> None:
             self.advance()
-            self.fmu.set(variable, to_fmu(sig.value))
-            self._sample_soon(self.sim.now)
+            value = to_fmu(sig.value)
+            if checked or type(value) is not float:
+                fmu.set(variable, value)
+            else:
+                var.set(value)
+            if self._samplers:
+                self._sample_soon(self.sim.now)
 
         self.fmu.set(variable, to_fmu(signal.value))
         signal.subscribe(on_change)
@@ -367,6 +379,8 @@ class Plant:
 
         in_row = take_in_row if block is not None else take
         flush = block.flush if block is not None else (lambda: None)
+        # rows of samples stepped and read in C (cosim.gridloop), where it is available: the same FMI calls
+        grid = fmu.grid_row(block) if block is not None else None
 
         def sample_now() -> None:
             try:
@@ -401,6 +415,17 @@ class Plant:
                         t = t0 + k * period
                         if env.look_aheads or self._watched or peek() <= t:  # sim.due_by(t)
                             break
+                        if (grid is not None and not (self._before_step or self._after_step) and fmu.t < t
+                                and t < gridloop.EXACT_TICKS):
+                            # a row of instants stepped and sampled in C: t is then its last one, sampled (the
+                            # loop's in_row(t) does nothing), or the step left pending, sampled after finishing
+                            k, t = self._grid_rows(grid, block, last, t0=t0, period=period, k=k)
+                            if grid.pending:  # the step to t was made and needs more than a sample
+                                reached = grid.finish(t)
+                                self.steps += 1
+                                if reached < t:
+                                    self._resume(t, reached)
+                            continue
                         count_step(t)  # progress on long sampled runs, which run here without events
                         if self._before_step or self._after_step:
                             advance_to(t)
@@ -421,6 +446,33 @@ class Plant:
         if at_events:
             self._samplers.append(take)
         return sample_now
+
+    def _grid_rows(self, grid: Any, block: Any, last: list[int], *, t0: int, period: int, k: int) -> tuple[int, int]:
+        """One row of grid instants from ``t0 + k*period`` on, stepped and sampled in C: as many as are before the
+        next queued event and fit in the block. Returns the ``(k, t)`` of the row's last instant, sampled, or
+        of the step left :attr:`~cosim.gridloop.GridRow.pending`, not sampled yet."""
+        env = self.sim.env
+        n = block.rows - block.count
+        due = env.peek()
+        if due < math.inf:
+            n = min(n, (int(due) - t0 - 1) // period - k + 1)  # instants t0 + m*period < due, m >= k
+        n = min(n, (gridloop.EXACT_TICKS - 1 - t0) // period - k + 1)  # >= 1: t0 + k*period is below both
+        done = grid.run(t0, period, k, n)
+        passes = done + int(grid.pending)  # env.count_step for each, inline (progress reports)
+        before = env._steps + env._skips
+        env._skips += passes
+        self.steps += done
+        k += done if grid.pending else done - 1
+        t = t0 + k * period
+        if env._on_progress is not None and (before ^ (before + passes)) >> 12:
+            env._on_progress(t)
+        if done and not grid.pending:
+            last[0] = t
+        elif done:
+            last[0] = t - period
+        if block.count == block.rows:
+            block.flush()
+        return k, t
 
     def watch(self, variable: str, *, signal: str | None = None, kind: str = "bit") -> Signal:
         """Publish output ``variable`` as a signal that changes at the plant's own events.

@@ -253,3 +253,119 @@ def test_an_ahead_writer_sets_a_schedule_without_stepping_the_plant() -> None:
             stepper.ahead_writer("step_segments", np.zeros((64, 2)))
         with pytest.raises(ConfigurationError, match=r"takes a Float64 array of an FMI 3.0 FMU; got step_rate"):
             stepper.ahead_writer("step_rate", np.zeros(1))
+
+
+# -- rows of grid samples stepped in C (cosim.gridloop) ------------------------------------------------
+
+GridRun = tuple[dict[str, tuple[list[int], bytes]], int, str | None, int]
+
+
+def grid_run(model: str, fmi_version: int, parameters: dict[str, float], *, outputs: list[str], period: int,
+             until: int, python_loop: bool, monkeypatch: pytest.MonkeyPatch) -> GridRun:
+    """A plant recorded on a grid, nothing else stepping it: the samples, the steps, how it ended, and how many
+    rows the C loop ran (the Python loop when ``python_loop``)."""
+    from cosim import gridloop
+    from cosim.errors import PlantTerminated
+
+    rows = [0]
+    real_run = gridloop.GridRow.run
+
+    def counted(self: gridloop.GridRow, *args: int) -> int:
+        rows[0] += 1
+        return real_run(self, *args)
+
+    monkeypatch.setattr(gridloop.GridRow, "run", counted)
+    monkeypatch.setattr(gridloop, "_LOADED", [None] if python_loop else [])
+    with Simulation() as sim:
+        plant = Plant.load(sim, model, name="p", fmi_version=fmi_version, parameters=parameters)
+        sample = plant.record(outputs, period=period)
+        ended = None
+        try:
+            sim.run(until=until)
+            sample()
+        except (PlantTerminated, FmuError) as exc:
+            ended = f"{type(exc).__name__}: {exc}"
+        samples = {}
+        for name in outputs:
+            t, v = sim.trace.edges(f"p.{name}")
+            samples[name] = (t.tolist(), v.tobytes())
+    return samples, plant.steps, ended, rows[0]
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+def test_the_servo_on_the_pmac_grid_stepped_in_c_gives_the_python_loops_samples_to_the_last_bit(
+        fmi_version: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The Servo turning (u_cmd = 2 V) recorded every 442 us for 0.5 s, eleven outputs of three FMI types: the
+    C loop makes the doSteps and getter calls the Python loop makes, so every sample is the same, to the bit."""
+    outputs = ["angle", "speed", "current", "motor_voltage", "torque", "stuck", "encoder_count", "edge_count",
+               "edge_direction", "t_last_edge", "t_prev_edge"]
+    run = partial(grid_run, "Servo", fmi_version, {"u_cmd": 2.0}, outputs=outputs, period=442 * US, until=500 * MS,
+                  monkeypatch=monkeypatch)
+    in_c, steps_c, ended_c, rows = run(python_loop=False)
+    in_python, steps_python, ended_python, _ = run(python_loop=True)
+    assert in_c["angle"][0][:3] == [0, 442_000, 884_000]
+    assert in_c["angle"][0][-2:] == [499_902_000, 500_000_000]  # 1131 x 442 us, then the end of the run
+    assert steps_c == steps_python == 1132
+    assert rows >= 1
+    assert np.frombuffer(in_c["encoder_count"][1])[-1] > 0  # the motor turned: the encoder counted
+    assert in_c == in_python
+    assert ended_c is ended_python is None
+
+
+@pytest.mark.parametrize("fmi_version", [2, 3])
+@pytest.mark.parametrize("parameters", [{}, {"terminate_time": 0.35}, {"terminate_time": 0.36}, {"error_time": 0.35}],
+                         ids=["event", "terminate-between-samples", "terminate-on-a-sample", "error"])
+def test_rows_in_c_stop_where_the_plant_needs_more_than_a_sample_as_the_python_loop_does(
+        fmi_version: int, parameters: dict[str, float], monkeypatch: pytest.MonkeyPatch) -> None:
+    """TypesTest (speed 1 m/s, its time event at 0.2 s) every 30 ms: the event (FMI 3.0: an early return, sampled
+    at 200 ms), a terminate request between samples (at 350 ms: the run ends there) or on one (360 ms: that sample
+    is the FMU's last values) and a doStep failing (at 0.35 s) leave the same samples, steps and message in C as
+    in Python."""
+    run = partial(grid_run, "TypesTest", fmi_version, {"speed": 1.0, **parameters}, outputs=["position", "event_stage"],
+                  period=30 * MS, until=500 * MS, monkeypatch=monkeypatch)
+    in_c, steps_c, ended_c, rows = run(python_loop=False)
+    in_python, steps_python, ended_python, _ = run(python_loop=True)
+    times = in_c["position"][0]
+    name = next((k for k in ("terminate_time", "error_time") if k in parameters), "")
+    last = {"": 500, "terminate_time": 330 if parameters.get("terminate_time") == 0.35 else 360, "error_time": 330}
+    expected = [k * 30 * MS for k in range(last[name] // 30 + 1)] + ([500 * MS] if not name else [])
+    if fmi_version == 3:  # the early return at the time event: a sample there
+        expected = sorted([*expected, 200 * MS])
+    assert times == expected
+    assert rows >= 1
+    assert (in_c, steps_c, ended_c) == (in_python, steps_python, ended_python)
+    if name == "terminate_time":
+        assert ended_c is not None and f"terminated at t={int(parameters[name] * 1000)}000000 ticks" in ended_c
+    if name == "error_time":
+        assert ended_c is not None and ended_c.startswith("FmuError") and "failed with status Error" in ended_c
+
+
+def test_without_a_c_compiler_or_with_a_failing_one_the_python_loop_runs_and_the_build_is_not_retried(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """No compiler on PATH: no C loop (the grid is stepped in Python, same samples). A compiler that fails: the
+    failure is kept beside the library's name (``.failed``, its message) and not tried again on the next run."""
+    from cosim import gridloop
+
+    monkeypatch.setenv("COSIM_FMU_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setenv("PATH", str(tmp_path / "nothing"))
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    samples, steps, ended, rows = grid_run("TypesTest", 3, {"speed": 1.0}, outputs=["position"], period=100 * MS,
+                                           until=300 * MS, python_loop=False, monkeypatch=monkeypatch)
+    assert samples["position"][0] == [0, 100 * MS, 200 * MS, 300 * MS]
+    assert (steps, ended, rows) == (3, None, 0)
+
+    monkeypatch.undo()
+    monkeypatch.setenv("COSIM_FMU_CACHE", str(tmp_path / "cache"))
+    broken = tmp_path / "gridloop.c"
+    broken.write_text("this is not C\n")
+    monkeypatch.setattr(gridloop, "SOURCE", broken)
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    failed = list((tmp_path / "cache").glob("gridloop-*.failed"))
+    assert len(failed) == 1 and b"error" in failed[0].read_bytes()
+    calls = []
+    monkeypatch.setattr("subprocess.run", lambda *args, **kwargs: calls.append(args))
+    monkeypatch.setattr(gridloop, "_LOADED", [])
+    assert gridloop.library() is None
+    assert calls == []  # not compiled again
