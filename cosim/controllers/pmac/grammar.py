@@ -57,7 +57,7 @@ _online: cs_select | motor_select | motor_def | motor_query | open_buffer | clos
        | percent | percent_query | assign | range_assign | mdef | mdef_query | query | range_query | plc_control
        | motor_command | axis_set | control_char | frax | pmatch | home_cmd | other_online | undefine
 
-cs_select: "&" data
+cs_select: _CS_AMP data
 motor_select: "#" data
 motor_def: "#" INT "->" axis_def
 motor_query: "#" INT "->"
@@ -140,7 +140,7 @@ send: SEND_KW (STRING | CTRL)
 display: _DISPLAY [INT] STRING -> display_text
        | _DISPLAY INT "," INT "." INT "," var -> display_var
 address_cmd: _ADDRESS (address_item)+
-address_item: "&" data -> address_cs
+address_item: _CS_AMP data -> address_cs
             | "#" data -> address_motor
 normal: _NORMAL center_word+
 code_call: CODE_LETTER data
@@ -165,7 +165,7 @@ data: [SIGN] value
 
 ?expr: sum
 ?sum: product (ADDOP product)*
-?product: unary (MULOP unary)*
+?product: unary ((MULOP | BITAND) unary)*
 ?unary: "-" atom -> neg
       | "+" atom
       | atom
@@ -246,7 +246,9 @@ MVAR: /M[0-9]+/i
 VARIND: /[IPQM](?=\s*\()/i
 CMP: "!=" | "<>" | "!>" | "!<" | ">=" | "<=" | ">" | "<"
 ADDOP: "+" | "-" | "|" | "^"
-MULOP: "*" | "/" | "%" | "&"
+MULOP: "*" | "/" | "%"
+BITAND.3: /&(?!=)/
+_CS_AMP: /&/
 INT: /[0-9]+/
 NUMBER: /[0-9]+\.[0-9]*|\.[0-9]+/
 SCALE: /[0-9]+(\.[0-9]*)?|\.[0-9]+/
