@@ -244,3 +244,20 @@ def test_the_job_is_done_when_every_started_motion_program_has_ended(sim: Simula
     times, values = sim.trace.edges("pmac.job")
     assert [(int(t), int(v)) for t, v in zip(times, values, strict=True)] == [(0, 0), (442_708, 1), (20_364_585, 2)]
     assert pmac.programs.memory.p[1] > 60
+
+
+def test_the_rotary_buffer_example_of_the_reference_loads_and_is_listed_not_modelled(sim: Simulation) -> None:
+    """OPEN ROT: lines go to the addressed system's rotary buffer (``&1 X10 Y10 F5``); B0 points at it."""
+    pmac = Pmac(sim)
+    pmac.load("&1 #1->1X #2->1Y\n&2 #3->1X #4->1Y\n&2 DEFINE ROT 100\n&1 DEFINE ROT 100\n&1 B0 &2 B0\nOPEN ROT\n"
+              "&1 X10 Y10 F5\n&2 X30 Y30 F10\nCLOSE\n&1R &2R\n", source="rot.pmc")
+    listed = {(item.name, item.where) for item in sim.notes.unmodelled()}
+    assert {("&1 B0", "rot.pmc:5:4"), ("&1 R", "rot.pmc:10:3"), ("&2 R", "rot.pmc:10:7")} <= listed
+    _run(sim, pmac, 5)
+    assert pmac.job.state == JobState.IDLE  # nothing runs: the rotary buffer is kept, not run
+
+
+def test_open_rotary_takes_no_number(sim: Simulation) -> None:
+    pmac = Pmac(sim)
+    with pytest.raises(ConfigurationError, match=r"^r.pmc:2:13: OPEN ROTARY 8388607: a rotary buffer takes no number"):
+        pmac.load("CLOSE\nOPEN ROTARY 8388607\nCLOSE\n", source="r.pmc")

@@ -77,8 +77,9 @@ MAX_BLOCKS = 32
 CODE_PROGRAMS = {"G": 1000, "M": 1001, "T": 1002, "D": 1003}
 
 _OPEN_HEAD = re.compile(r"\s*OPEN\s*(?:(?:PROGRAM|PROG|PLCC|PLC|FORWARD|FWD|INVERSE|INV)(?![A-Z])\s*(?:\d+)?"
-                        r"|(?:BINARY\s+)?ROTARY(?![A-Z]))\s*(?:CLEAR(?![A-Z]))?", re.IGNORECASE)
+                        r"|(?:BINARY\s+)?(?:ROTARY|ROT)(?![A-Z]))\s*(?:CLEAR(?![A-Z]))?", re.IGNORECASE)
 _ROTARY_NUMBER = re.compile(r"\s*([0-9$][0-9A-F]*)", re.IGNORECASE)
+_CS_PREFIX = re.compile(r"(?:\s*&\s*[0-9]+)*")
 _CLOSE_WORD = re.compile(r"(?<![A-Z0-9_])CLOSE(?![A-Z0-9_])", re.IGNORECASE)
 
 
@@ -256,12 +257,16 @@ class _Reader:
                 self.items.append(stmt)
 
     def program(self, text: str, line: Line, column: int = 1) -> None:
+        opened = self.current
+        assert opened is not None
+        select = _CS_PREFIX.match(text) if opened.stmt.kind == "ROTARY" else None
+        if select is not None and select.end() > 0:  # &n X10 Y10: the line goes to &n's rotary buffer
+            parse_line(text[:select.end()], context="online", source=line.source, line=line.line, column=column)
+            text, column = text[select.end():], column + select.end()
         close = _close_in(text)
         before = text if close is None else text[:close]
         statements = parse_line(before, context="program", source=line.source, line=line.line, column=column) \
             if before.strip() else []
-        opened = self.current
-        assert opened is not None
         for index, stmt in enumerate(statements):
             if isinstance(stmt, Clear):
                 if index > 0 or opened.lines:

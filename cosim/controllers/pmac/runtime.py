@@ -276,7 +276,11 @@ class Programs(Commands):
 
     # -- starting motion programs ------------------------------------------------------------------
     def begin(self, cs_number: int, number: int, pos: Pos) -> None:
-        """``&x Bn``: point coordinate system x at the top of motion program n."""
+        """``&x Bn``: point coordinate system x at the top of motion program n (B0: its rotary buffer)."""
+        if number == 0:
+            self.not_modelled(f"&{cs_number} B0", "the rotary buffer (not run)", str(pos))
+            self.selected[cs_number] = 0
+            return
         code = self.program(number, pos)
         self.check_program_axes(cs_number, code)
         cs = self.pmac.coordinate_system(cs_number)
@@ -298,6 +302,9 @@ class Programs(Commands):
         number = self.selected.get(cs_number)
         if number is None:
             raise pos.error(f"R: coordinate system {cs_number} has no program to run (point it at one with B n)")
+        if number == 0:
+            self.not_modelled(f"&{cs_number} R", "run of the rotary buffer (not modelled: nothing runs)", str(pos))
+            return
         modes = self.modes.get(cs_number)
         if modes is None:
             base = 5000 + 100 * cs_number
@@ -446,7 +453,7 @@ class Programs(Commands):
                     session.cs = int(number)
             elif isinstance(stmt, Begin):
                 number = constant(stmt.number)
-                if number is not None:
+                if number is not None and number != 0:  # B0: the rotary buffer (not run)
                     self.check_program_axes(session.cs, self.program(int(number), stmt.pos))
             elif isinstance(stmt, PlcControl):
                 self.note_missing(stmt)
