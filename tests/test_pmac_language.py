@@ -237,7 +237,8 @@ def test_the_job_is_done_when_every_started_motion_program_has_ended(sim: Simula
         PLC 1      scanning all along: PLCs are not the job
     """
     pmac = Pmac(sim)
-    pmac.load("I5=2\n&1 #1->1X\n&2 #2->1Y\nOPEN PROG 1 CLEAR TA0 TS0 TM10 X1 CLOSE\nOPEN PROG 2 CLEAR TA0 TS0 TM20 Y1 CLOSE\n"
+    pmac.load("I5=2\n&1 #1->1X\n&2 #2->1Y\n"
+              "OPEN PROG 1 CLEAR TA0 TS0 TM10 X1 CLOSE\nOPEN PROG 2 CLEAR TA0 TS0 TM20 Y1 CLOSE\n"
               "OPEN PLC 1 CLEAR P1=P1+1 CLOSE\nENABLE PLC 1\n", source="j.pmc")
     pmac.command("&1 B1 R &2 B2 R")
     _run(sim, pmac, 60)

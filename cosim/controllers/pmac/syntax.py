@@ -301,7 +301,7 @@ class _Converter:
             return Home(pos, str(kids[0]).upper(), motors)
         if kind in ("other_online", "other_program"):
             text = " ".join(str(k).strip() for k in kids if k is not None)
-            if kids[0].type == "PORT_SELECT":  # ##n (the port's motor group), @n (the card on a daisy chain)
+            if isinstance(kids[0], Token) and kids[0].type == "PORT_SELECT":  # ##n: motor group; @n: card
                 return Other(pos, "##" if text.startswith("##") else "@", re.sub(r"\s", "", text).upper())
             return Other(pos, str(kids[0]).upper(), text)
         if kind == "label":
