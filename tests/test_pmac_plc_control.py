@@ -44,9 +44,17 @@ def test_i5_permits_the_foreground_and_background_plcs(sim: Simulation, setup: s
 def test_enabling_a_plc_that_i5_keeps_off_is_in_the_notes(sim: Simulation) -> None:
     pmac = Pmac(sim)
     pmac.load(PLCS + "ENABLE PLC 1\n", source="p.pmc")
+    pmac.start()
     assert any("ENABLE PLC 1 at p.pmc:7:1: I5 = 1 keeps the background PLCs 1..31 off" in text
                for text in sim.notes.texts())
     assert not any(item.name == "I5" for item in sim.notes.unmodelled())  # I5 acts: not "set, not modelled"
+
+
+def test_i5_set_after_the_enable_in_the_same_file_counts_and_leaves_no_note(sim: Simulation) -> None:
+    pmac = Pmac(sim)
+    pmac.load(PLCS + "ENABLE PLC 0,1\nI5=3\n", source="late.pmc")
+    pmac.start()
+    assert not any("I5 = " in text for text in sim.notes.texts())
 
 
 def test_a_plc_that_sets_i5_starts_the_background(sim: Simulation) -> None:

@@ -46,8 +46,8 @@ PLC programs are disabled after ``OPEN PLC`` and start with ``ENABLE PLC n`` (fr
 PLC needs to run: bit 0 the foreground PLC 0 (and PLCC 0), bit 1 the background PLC 1..31 (and
 PLCC 1..31). So at the default (1) PLC 0 runs and the background PLCs do not, however enabled; a
 project that uses background PLCs sets I5 = 2 or 3. I5 is read at every scan (a program may
-change it; the background wakes on the write). ``ENABLE PLC n`` of a PLC that I5 keeps off is
-listed in the run's notes.
+change it; the background wakes on the write). A PLC enabled when the servo clock starts (or
+enabled later) that I5 keeps off is listed in the run's notes with the place of its ``ENABLE``.
 """
 
 from __future__ import annotations
@@ -139,6 +139,8 @@ class Programs(Commands):
         self._lines: dict[tuple[str, int], list[tuple[Stmt, ...]]] = {}
         self._uses: list[tuple[int, int, Pos]] = []
         self._compiled: dict[int, Compiled] = {}
+        self._enabled_at: dict[int, Pos] = {}  # where each PLC was last enabled (for the I5 note)
+        self._scanning = False
 
     # -- compiled code -------------------------------------------------------------------------
     def compiled(self, code: Code) -> Compiled:
@@ -335,11 +337,10 @@ class Programs(Commands):
             plc = self.plcs.get(number)
             if plc is None:
                 continue  # the controller accepts it: there is nothing to enable or disable
-            if stmt.verb == "ENABLE" and not self.i5_permits(number):
-                self.pmac.sim.notes.add(
-                    f"{self.pmac.device}: ENABLE PLC {number} at {stmt.pos}: I5 = {self.pmac.get_ivar(5)} keeps "
-                    f"{'PLC 0 (foreground)' if number == 0 else 'the background PLCs 1..31'} off (the PLC runs "
-                    f"when I5 is {'1 or 3' if number == 0 else '2 or 3'})", key=f"I5 {self.pmac.device} {number}")
+            if stmt.verb == "ENABLE":
+                self._enabled_at[number] = stmt.pos
+                if self._scanning and not self.i5_permits(number):
+                    self._note_i5(number)
             if stmt.verb == "ENABLE" and number not in self.enabled:
                 plc.restart(plc.context.code)
                 self.enabled.add(number)
@@ -361,6 +362,13 @@ class Programs(Commands):
                 f"{self.pmac.device}: {stmt.verb} PLC{'C' if stmt.compiled else ''} at {stmt.pos}: no PLC program "
                 f"{_numbers(missing)} (no effect on {'it' if len(missing) == 1 else 'them'}; PLC programs: {known})",
                 key=f"PLC missing {self.pmac.device} {stmt.pos}")
+
+    def _note_i5(self, number: int) -> None:
+        """PLC ``number`` is enabled but I5 keeps it off: say so in the run's notes."""
+        self.pmac.sim.notes.add(
+            f"{self.pmac.device}: ENABLE PLC {number} at {self._enabled_at[number]}: I5 = {self.pmac.get_ivar(5)} "
+            f"keeps {'PLC 0 (foreground)' if number == 0 else 'the background PLCs 1..31'} off (the PLC runs when "
+            f"I5 is {'1 or 3' if number == 0 else '2 or 3'})", key=f"I5 {self.pmac.device} {number}")
 
     def i5_permits(self, number: int) -> bool:
         """I5 lets PLC ``number`` run: bit 0 for the foreground PLC 0, bit 1 for the background PLC 1..31."""
@@ -490,6 +498,10 @@ class Programs(Commands):
     def start(self) -> None:
         """Check everything and start the background scans (if there are PLC programs)."""
         self.check()
+        self._scanning = True
+        for number in sorted(self.enabled):
+            if not self.i5_permits(number):
+                self._note_i5(number)
         if any(number != 0 for number in self.plcs):
             self.pmac.sim.process(self.background())
 
