@@ -85,8 +85,9 @@ def test_pokeys56u_runs_at_most_25_pulses_per_1_ms_slot(sim: Simulation, pulses:
 
 
 def test_pmac_background_plcs_scan_every_200_us_from_0_lowest_number_first(sim: Simulation) -> None:
+    """I5=2: the background PLCs may run (its default 1 runs PLC 0 only, Turbo Software Reference)."""
     pmac = Pmac(sim)
-    pmac.load("OPEN PLC 2 CLEAR\nP2=P2+1\nCLOSE\nOPEN PLC 1 CLEAR\nP1=P2\nCLOSE\n", source="plcs.pmc")
+    pmac.load("I5=2\nOPEN PLC 2 CLEAR\nP2=P2+1\nCLOSE\nOPEN PLC 1 CLEAR\nP1=P2\nCLOSE\n", source="plcs.pmc")
     pmac.command("ENABLE PLC 2")
     pmac.command("ENABLE PLC 1")
     pmac.start()

@@ -162,7 +162,7 @@ def test_plc_background_scans_at_their_period_and_a_while_loop_ends_a_scan(sim: 
         scan   1: P3=1, P1=1 | 2: P1=2 | 3: P1=3 | 4: loop done, P2=1 | 5: P3=2, P2=2 | ...
     """
     plc = "OPEN PLC 1 CLEAR\nP3=P3+1\nWHILE (P1 < 3)\n P1=P1+1\nENDWHILE\nP2=P2+1\nCLOSE"
-    pmac = _pmac(sim, "&1 #1->1X", plc, command="ENABLE PLC 1")
+    pmac = _pmac(sim, "I5=2\n&1 #1->1X", plc, command="ENABLE PLC 1")
     pmac.programs.configure_scan(period=sim.ticks("100 us"), offset=sim.ticks("50 us"))
     pmac.start()
     sim.run(until=sim.ticks("550 us"))  # scans at 50, 150, 250, 350, 450 us (not yet 550)
@@ -174,7 +174,7 @@ def test_plc_background_scans_at_their_period_and_a_while_loop_ends_a_scan(sim: 
 def test_plc_0_runs_every_servo_cycle_and_plcs_start_and_stop_each_other(sim: Simulation) -> None:
     text = ("OPEN PLC 0 CLEAR\nP1=P1+1\nIF (P1=3) ENABLE PLC 2\nIF (P1=5) DISABLE PLC 0\nCLOSE\n"
             "OPEN PLC 2 CLEAR\nP2=P2+1\nCLOSE\n")
-    pmac = _pmac(sim, "", text, command="ENABLE PLC 0")
+    pmac = _pmac(sim, "I5=3", text, command="ENABLE PLC 0")
     pmac.programs.configure_scan(period=sim.ticks("1 ms"))
     pmac.start()
     sim.run(until=pmac.clock.t(12))  # servo cycles 1..11 run PLC 0 (cycle 0 is the table's first)
@@ -185,7 +185,7 @@ def test_plc_0_runs_every_servo_cycle_and_plcs_start_and_stop_each_other(sim: Si
 
 def test_a_plc_starts_a_motion_program_with_cmd(sim: Simulation) -> None:
     text = "OPEN PROG 3 CLEAR\nTA0 TS0 F1000 X1\nCLOSE\nOPEN PLC 1 CLEAR\nCMD\"&1 B3 R\"\nDISABLE PLC 1\nCLOSE\n"
-    pmac = _pmac(sim, "&1 #1->1X", text, command="ENABLE PLC 1")
+    pmac = _pmac(sim, "I5=2\n&1 #1->1X", text, command="ENABLE PLC 1")
     pmac.programs.configure_scan(period=sim.ticks("1 ms"), offset=sim.ticks("600 us"))
     rows = _run(sim, pmac, 6, lambda k, t: pmac.coordinate_system(1).position("X"))
     assert rows == [0, 0, 0, Fraction(1, 4), Fraction(1, 2), Fraction(3, 4)]  # issued at 0.6 ms, runs from cycle 3
@@ -232,7 +232,7 @@ def test_numbers_stay_bounded_in_48_bits(sim: Simulation) -> None:
     """P1=P1/3: exact while the denominator fits 48 bits (3^30 < 2^48), then the nearest value with one that
     does (within 2^-49); growth past 2^47 is an error."""
     text = "OPEN PLC 1 CLEAR\nIF (P2=0) P1=1\nWHILE (P2 < 40) P1=P1/3 P2=P2+1 IF (P2=30) P3=P1\nCLOSE"
-    pmac = _pmac(sim, "", text, command="ENABLE PLC 1")
+    pmac = _pmac(sim, "I5=2", text, command="ENABLE PLC 1")
     pmac.programs.configure_scan(period=sim.ticks("10 us"))
     pmac.start()
     sim.run(until=sim.ticks("1 ms"))
@@ -256,7 +256,7 @@ def test_the_stale_capture_hazard_depends_on_the_plc_scan(sim: Simulation, scan_
     belt = IdealConveyor(sim, speed_counts_per_ms=64, marks=[500, 1500], mark_width_counts=5)
     pmac = Pmac(sim)
     pmac.add_channel(0x078008, belt, trigger=belt.mark)
-    pmac.load("I8000=$A78008 I8001=256 I5193=@I8001 I5194=8388607\nM103->X:$07800B,0,24,S\n&1 #1->1X")
+    pmac.load("I5=2 I8000=$A78008 I8001=256 I5193=@I8001 I5194=8388607\nM103->X:$07800B,0,24,S\n&1 #1->1X")
     read = "P103=M103\n" if dummy_read else ""
     pmac.load(f"OPEN PROG 1 CLEAR\nLINEAR ABS TA10 F64000\nDWELL0\nI8000=$978008\n{read}X3000\nCLOSE\n"
               "OPEN PLC 1 CLEAR\nIF (I8000=$978008) I8000=$B78008\nCLOSE\nENABLE PLC 1")

@@ -36,7 +36,7 @@ def test_a_motor_on_a_linear_combination_of_axes(sim: Simulation) -> None:
 
 def test_address_selects_the_q_variables_and_the_cmd_target_of_a_plc(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.load("&2 Q5=7\nOPEN PLC 1 CLEAR\nADDRESS &2\nP1=Q5\nCMD\"Q6=8\"\nDISABLE PLC 1\nCLOSE\nENABLE PLC 1\n",
+    pmac.load("I5=2\n&2 Q5=7\nOPEN PLC 1 CLEAR\nADDRESS &2\nP1=Q5\nCMD\"Q6=8\"\nDISABLE PLC 1\nCLOSE\nENABLE PLC 1\n",
               source="a.pmc")
     _run(sim, pmac, 2)
     memory = pmac.programs.memory
@@ -95,7 +95,7 @@ def test_a_kinematic_system_without_an_inverse_program_is_refused_at_the_move(si
 
 def test_one_line_buffers_enable_ranges_and_and_or_lines(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.load("OPEN PLC 1 CLEAR P1=P1+1 CLOSE\nOPEN PLC 2 CLEAR P2=P2+1 CLOSE\nOPEN PLC 3 CLEAR P3=P3+1 CLOSE\n"
+    pmac.load("I5=2\nOPEN PLC 1 CLEAR P1=P1+1 CLOSE\nOPEN PLC 2 CLEAR P2=P2+1 CLOSE\nOPEN PLC 3 CLEAR P3=P3+1 CLOSE\n"
               "OPEN PLC 4 CLEAR\nIF (P1>0)\nAND (P2>0)\nOR (P9=1)\nP4=1\nENDIF\nCLOSE\nENABLE PLC 1..2,4\n",
               source="o.pmc")
     pmac.programs.configure_scan(period=pmac.clock.t(1))
@@ -109,7 +109,7 @@ def test_one_line_buffers_enable_ranges_and_and_or_lines(sim: Simulation) -> Non
 def test_and_binds_tighter_than_or_across_continued_lines(sim: Simulation) -> None:
     """``IF (P1=1)`` / ``OR (P2=1)`` / ``AND (P3=1)`` is P1=1 OR (P2=1 AND P3=1)."""
     pmac = Pmac(sim)
-    pmac.load("OPEN PLC 1 CLEAR\nIF (P1=1)\nOR (P2=1)\nAND (P3=1)\nP4=P4+1\nENDIF\nDISABLE PLC 1\nCLOSE\n"
+    pmac.load("I5=2\nOPEN PLC 1 CLEAR\nIF (P1=1)\nOR (P2=1)\nAND (P3=1)\nP4=P4+1\nENDIF\nDISABLE PLC 1\nCLOSE\n"
               "P1=1 P2=0 P3=0\nENABLE PLC 1\n", source="o.pmc")
     _run(sim, pmac, 2)
     assert pmac.programs.memory.p[4] == 1
@@ -117,7 +117,7 @@ def test_and_binds_tighter_than_or_across_continued_lines(sim: Simulation) -> No
 
 def test_cmd_and_control_characters_act_at_the_instant_the_program_reaches_them(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.load("&1 #1->1X\nOPEN PROG 1 CLEAR\nLINEAR TA0 TS0 F1000 X1000\nCLOSE\n"
+    pmac.load("I5=2\n&1 #1->1X\nOPEN PROG 1 CLEAR\nLINEAR TA0 TS0 F1000 X1000\nCLOSE\n"
               "OPEN PLC 1 CLEAR\nIF (P1=0) CMD\"&1B1R\" P1=1\nIF (P1=1 AND M1=0) P1=2\nCLOSE\n"
               "OPEN PLC 2 CLEAR\nIF (P1=2) COMMAND^A DISABLE PLC 2\nCLOSE\nM1->*\nENABLE PLC 1\n", source="c.pmc")
     pmac.programs.configure_scan(period=sim.ticks("10 ms"), offset=sim.ticks("10 ms"))
@@ -135,7 +135,7 @@ def test_cmd_and_control_characters_act_at_the_instant_the_program_reaches_them(
 
 def test_send_and_display_write_to_the_console(sim: Simulation) -> None:
     pmac = Pmac(sim)
-    pmac.load("P7=2.5\nOPEN PLC 3 CLEAR\nSEND1\"READY\"\nDISPLAY 40,6.2,P7\nDISABLE PLC 3\nCLOSE\nENABLE PLC 3\n",
+    pmac.load("I5=2 P7=2.5\nOPEN PLC 3 CLEAR\nSEND1\"READY\"\nDISPLAY 40,6.2,P7\nDISABLE PLC 3\nCLOSE\nENABLE PLC 3\n",
               source="s.pmc")
     _run(sim, pmac, 1)
     assert [(line.source, line.text) for line in sim.trace.console()] == [("pmac.plc3", "READY"),
@@ -237,10 +237,28 @@ def test_the_job_is_done_when_every_started_motion_program_has_ended(sim: Simula
         PLC 1      scanning all along: PLCs are not the job
     """
     pmac = Pmac(sim)
-    pmac.load("&1 #1->1X\n&2 #2->1Y\nOPEN PROG 1 CLEAR TA0 TS0 TM10 X1 CLOSE\nOPEN PROG 2 CLEAR TA0 TS0 TM20 Y1 CLOSE\n"
+    pmac.load("I5=2\n&1 #1->1X\n&2 #2->1Y\n"
+              "OPEN PROG 1 CLEAR TA0 TS0 TM10 X1 CLOSE\nOPEN PROG 2 CLEAR TA0 TS0 TM20 Y1 CLOSE\n"
               "OPEN PLC 1 CLEAR P1=P1+1 CLOSE\nENABLE PLC 1\n", source="j.pmc")
     pmac.command("&1 B1 R &2 B2 R")
     _run(sim, pmac, 60)
     times, values = sim.trace.edges("pmac.job")
     assert [(int(t), int(v)) for t, v in zip(times, values, strict=True)] == [(0, 0), (442_708, 1), (20_364_585, 2)]
     assert pmac.programs.memory.p[1] > 60
+
+
+def test_the_rotary_buffer_example_of_the_reference_loads_and_is_listed_not_modelled(sim: Simulation) -> None:
+    """OPEN ROT: lines go to the addressed system's rotary buffer (``&1 X10 Y10 F5``); B0 points at it."""
+    pmac = Pmac(sim)
+    pmac.load("&1 #1->1X #2->1Y\n&2 #3->1X #4->1Y\n&2 DEFINE ROT 100\n&1 DEFINE ROT 100\n&1 B0 &2 B0\nOPEN ROT\n"
+              "&1 X10 Y10 F5\n&2 X30 Y30 F10\nCLOSE\n&1R &2R\n", source="rot.pmc")
+    listed = {(item.name, item.where) for item in sim.notes.unmodelled()}
+    assert {("&1 B0", "rot.pmc:5:4"), ("&1 R", "rot.pmc:10:3"), ("&2 R", "rot.pmc:10:7")} <= listed
+    _run(sim, pmac, 5)
+    assert pmac.job.state == JobState.IDLE  # nothing runs: the rotary buffer is kept, not run
+
+
+def test_open_rotary_takes_no_number(sim: Simulation) -> None:
+    pmac = Pmac(sim)
+    with pytest.raises(ConfigurationError, match=r"^r.pmc:2:13: OPEN ROTARY 8388607: a rotary buffer takes no number"):
+        pmac.load("CLOSE\nOPEN ROTARY 8388607\nCLOSE\n", source="r.pmc")

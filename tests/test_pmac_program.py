@@ -37,7 +37,7 @@ def _pmac(sim: Simulation) -> Pmac:
 
 
 def test_a_file_mixes_online_commands_and_buffers_in_order() -> None:
-    text = ("CLOSE\nI5194=8388607 &1 #1->1000X\nOPEN PROG 7 CLEAR\nLINEAR ABS TA20 F64000\n X1000 Y(P1+2)\n"
+    text = ("CLOSE\nI5194=8388607\n&1 #1->1000X\nOPEN PROG 7 CLEAR\nLINEAR ABS TA20 F64000\n X1000 Y(P1+2)\n"
             "N10 IF (M103 != 0) P1=P1+1\nGOTO10\nCLOSE\nOPEN PLC 2\nCLEAR\nENABLE PLC 2\nCLOSE\n")
     parsed = parse_text(text, source="cell.pmc")
     kinds = [type(item).__name__ for item in parsed.items]
@@ -118,7 +118,8 @@ def test_i_variable_constants_are_checked_where_they_are_written() -> None:
         ("OPEN PLC 1 CLEAR P1=1 CLOSE X10", r"^bad.pmc:1:29: 'X10' is a program statement: write it between OPEN"),
         ("OPEN PROG 1\nCLOSE X10", r"^bad.pmc:2:7: 'X10' is a program statement: write it between OPEN PROG n"),
         # fuzzing found it: a rotary buffer takes no number, what follows is its content
-        ("OPEN ROTARY 8388607", r"^bad.pmc:1:13: '8388607' is an online command, not allowed inside a program"),
+        ("OPEN ROTARY 8388607", r"^bad.pmc:1:13: OPEN ROTARY 8388607: a rotary buffer takes no number \(OPEN ROTARY "
+                                r"opens every coordinate system's rotary buffer; &n chooses"),
         ("CLEAR", r"^bad.pmc:1:1: CLEAR outside a buffer"),
         ("OPEN PLC 1\nIF (P1=1)\nP2=1\nCLOSE", r"^bad.pmc:2:1: IF without ENDIF in PLC 1$"),
         ("OPEN PLC 1\nWHILE (P1<1)\nENDIF\nCLOSE",
@@ -161,8 +162,6 @@ def test_bad_text_is_refused_with_file_line_and_column(text: str, message: str) 
         ("OPEN PROG 1\nCALL 9\nCLOSE", "", r"^prog.pmc:2:1: PROG 9 does not exist \(motion programs: 1\)$"),
         ("OPEN PROG 1\nX1\nCLOSE", "&1 B4 R", r"^cmd:1:4: PROG 4 does not exist \(motion programs: 1\)$"),
         ("OPEN PLC 1\nCMD\"&1B5R\"\nCLOSE", "", r"^prog.pmc:2:7: PROG 5 does not exist"),
-        ("OPEN PLC 1\nENABLE PLC 3\nCLOSE", "", r"^prog.pmc:2:1: PLC 3 does not exist \(PLC programs: 1\)$"),
-        ("OPEN PLC 1\nP1=1\nCLOSE", "ENABLE PLC 2", r"^cmd:1:1: PLC 2 does not exist \(PLC programs: 1\)$"),
         # an M-variable that nothing defines, or that names a register the model does not have
         ("OPEN PLC 1\nP1=M7\nCLOSE", "", r"^prog.pmc:2:4: M7 is not defined \(define it first"),
         # G, M, T, D codes call PROG 1000..1003 at label N(code * 1000)

@@ -61,7 +61,7 @@ def test_every_assignment_is_stored_readable_back_and_listed_as_not_modelled(sim
 def test_modelled_i_variables_act() -> None:
     sim = Simulation()
     pmac = Pmac(sim)
-    pmac.load("I5194=5000 I5187=7 &1 #1->1X\n", source="s.pmc")
+    pmac.load("I5194=5000 I5187=7\n&1 #1->1X\n", source="s.pmc")
     assert pmac.coordinate_system(1).ix94 == 5000 and pmac.coordinate_system(1).ix87 == 7
     assert not any(item.name in ("I5194", "I5187") for item in sim.notes.unmodelled())
 

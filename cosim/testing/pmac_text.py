@@ -46,6 +46,10 @@ TOKENS = (
     "END GATHER", "DELETE GATHER", "MS0,MI910=$F", "MSR0,MI920,P1", "LIST PROG 1", "$$$", "???", "G01", "M03", "T1",
     "D01", "CALL 10.5", "CALL 5 X10", "GOTO(P1)", "GOSUB(P2+1)", "SIN(30)", "ATAN2(1)", "SQRT(-1)", "LN(0)",
     "EXP(100)", "ACOS(2)", "342", "STOP", "WAIT", "CC1", "BLOCKSTART", "LOCK4,P10", "READ(X,Y)",
+    # after the review of the language front end: bit operators, approximate comparators, ports, the rotary buffer
+    "P1=P2&3", "IF(M1&4>0)", "P1=3&1", "0.875&-1.75", "~", "!~", "IF (P1~P2)", "##", "##1", "@0", "@", "#1J!",
+    "#1J=*", "#1J^*", "CMDS\"P1\"", "CMDR^A", "SENDR\"X\"", "SEND^@", "NX1", "TZ1", "I5=2", "I5=0", "&1 B0",
+    "OPEN ROT", "OPEN ROTARY 5", "&1 X10 Y10 F5",
 )
 #: Separators, every line end among them.
 SEPARATORS = (" ", " ", " ", "", "\n", "\n", "\r\n", "\r", "\t", "\x0b", "\x0c", "\x1c", "\x85", "\u2028", "\x00")

@@ -15,7 +15,7 @@ expression, loop or literal can grow a number without limit:
   digits and 30 fraction digits (more cannot be held), no exponent notation (PMAC has none).
 
 Operators (PMAC precedence: ``* / % &`` bind tighter than ``+ - | ^``, left to right):
-``%`` is the floor modulo, ``& | ^`` act on the integer parts (truncated toward zero); ``INT`` is
+``%`` is the floor modulo, ``& | ^`` act on the integer and the fraction bits (two's complement); ``INT`` is
 the floor and ``ABS`` the magnitude. Division by zero is an error.
 
 The transcendental functions (``SIN COS TAN ASIN ACOS ATAN ATAN2 SQRT LN EXP``) have no exact
@@ -130,15 +130,30 @@ def binary(op: str, a: Value, b: Value, *, where: str = "") -> Value:
         if b == 0:
             raise ConfigurationError(f"{where + ': ' if where else ''}division by zero ({a} {op} 0)")
         result = Fraction(a) / b if op == "/" else a % b
-    elif op == "&":
-        result = _integer_part(a) & _integer_part(b)
-    elif op == "|":
-        result = _integer_part(a) | _integer_part(b)
-    elif op == "^":
-        result = _integer_part(a) ^ _integer_part(b)
+    elif op in "&|^":
+        result = _bitwise(op, a, b)
     else:  # the grammar allows no other operator
         raise ConfigurationError(f"{where + ': ' if where else ''}operator {op!r} is not supported")
     return fit(result, what=f"{a} {op} {b}", where=where)
+
+
+def _bitwise(op: str, a: Value, b: Value) -> Value:
+    """``a & b``, ``a | b``, ``a ^ b`` on the integer and the fraction bits, two's complement.
+
+    Both values are taken as fixed-point words with as many fraction bits as the finer needs (a
+    binary fraction is exact; another is cut toward minus infinity at ``2^-48``), so
+    ``0.875 & -1.75`` is ``0.25`` and ``0.875 | -1.75`` is ``-0.375``, as the Turbo reference shows.
+    """
+    scale = 1
+    for value in (a, b):
+        denominator = Fraction(value).denominator
+        if denominator & (denominator - 1):  # not a power of two: the finest fraction the word holds
+            scale = DENOMINATOR
+            break
+        scale = max(scale, denominator)
+    x, y = math.floor(a * scale), math.floor(b * scale)
+    bits = x & y if op == "&" else x | y if op == "|" else x ^ y
+    return Fraction(bits, scale)
 
 
 _DOMAIN = {"SQRT": (">= 0", lambda x: x >= 0), "LN": ("> 0", lambda x: x > 0),

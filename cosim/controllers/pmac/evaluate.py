@@ -93,6 +93,7 @@ _COMPARE: dict[str, Callable[[Value, Value], bool]] = {
     "=": lambda a, b: a == b, "!=": lambda a, b: a != b, "<>": lambda a, b: a != b,
     ">": lambda a, b: a > b, "<": lambda a, b: a < b, "!>": lambda a, b: a <= b, "<=": lambda a, b: a <= b,
     "!<": lambda a, b: a >= b, ">=": lambda a, b: a >= b,
+    "~": lambda a, b: -1 < a - b < 1, "!~": lambda a, b: not -1 < a - b < 1,  # (not) approximately equal: within one
 }
 
 

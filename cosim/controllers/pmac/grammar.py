@@ -38,7 +38,7 @@ OTHER_PROGRAM = (
     "BLOCKSTART", "BLOCKSTOP", "BSTART", "BSTOP", "CCR", "CC0", "CC1", "CC2", "CC3", "ADIS", "IDIS", "AROT", "IROT",
     "TR", "TINIT", "TSELECT", "TXYZ", "TYZX", "TZXY", "LOCK", "UNLOCK", "READ", "PRELUDE", "PRELUDE0", "PRELUDE1",
     "SETPHASE", "MACROAUXREAD", "MACROAUXWRITE", "MACROSLVREAD", "MACROSLVWRITE", "MACROMSTREAD", "MACROMSTWRITE",
-    "SPLINE2", "PSET", "TSEL", "STOP", "WAIT", "GATHER", "ENDGATHER", "ENDG",
+    "SPLINE2", "PSET", "TSEL", "STOP", "WAIT", "GATHER", "ENDGATHER", "ENDG", "NX", "NY", "NZ", "TX", "TY", "TZ",
 )
 
 
@@ -57,7 +57,7 @@ _online: cs_select | motor_select | motor_def | motor_query | open_buffer | clos
        | percent | percent_query | assign | range_assign | mdef | mdef_query | query | range_query | plc_control
        | motor_command | axis_set | control_char | frax | pmatch | home_cmd | other_online | undefine
 
-cs_select: "&" data
+cs_select: _CS_AMP data
 motor_select: "#" data
 motor_def: "#" INT "->" axis_def
 motor_query: "#" INT "->"
@@ -103,6 +103,7 @@ home_cmd: HOME_KW [plc_list]
 undefine: UNDEFINE_KW [ALL_KW]
 other_online: OTHER_ON [REST]
             | OTHER_SYM [REST]
+            | PORT_SELECT
 
 program_line: [label] [cont] _stmt*
 label: _N INT
@@ -113,7 +114,7 @@ _stmt: assign | mod_assign | move | mode | modal_axes | param | dwell | delay | 
 mod_assign: MVAR MOD_OP expr
 move: move_word+ center_word*
 move_word: AXIS data [":" data] -> move_word
-         | AXIS data "^" data -> trigger_word
+         | AXIS data _TRIGGER data -> trigger_word
 center_word: CENTER data -> center
            | IVAR -> center_ivar
            | RADIUS data -> radius
@@ -140,7 +141,7 @@ send: SEND_KW (STRING | CTRL)
 display: _DISPLAY [INT] STRING -> display_text
        | _DISPLAY INT "," INT "." INT "," var -> display_var
 address_cmd: _ADDRESS (address_item)+
-address_item: "&" data -> address_cs
+address_item: _CS_AMP data -> address_cs
             | "#" data -> address_motor
 normal: _NORMAL center_word+
 code_call: CODE_LETTER data
@@ -164,8 +165,8 @@ data: [SIGN] value
           | "(" cond_or ")"
 
 ?expr: sum
-?sum: product (ADDOP product)*
-?product: unary (MULOP unary)*
+?sum: product ((ADDOP | BITXOR) product)*
+?product: unary ((MULOP | BITAND) unary)*
 ?unary: "-" atom -> neg
       | "+" atom
       | atom
@@ -179,7 +180,7 @@ data: [SIGN] value
 
 _OPEN: "OPEN"i
 BUFFER.2: /(PROGRAM|PROG|PLCC|PLC|FORWARD|FWD|INVERSE|INV)(?![A-Z])/i
-ROTARY_KW.2: /(BINARY\s+)?ROTARY(?![A-Z])/i
+ROTARY_KW.2: /(BINARY\s+)?(ROTARY|ROT)(?![A-Z])/i
 CLEAR_KW.2: /CLEAR(?![A-Z])/i
 CLOSE_KW.2: /CLOSE(?![A-Z])/i
 ALL_KW.2: /ALL(\s+PLCS)?(?![A-Z])/i
@@ -191,7 +192,7 @@ PERCENT_SET: /%(?=\s*[0-9.($@+-])/
 _DOTS: ".."
 DEFAULT: "*"
 INVKIN: /I(?![A-Z0-9])/i
-JOG: /J(?:[+-](?!\s*[0-9.(])|\/|=|:|\^)/i
+JOG: /J(?:[+-](?!\s*[0-9.(])|\/|!|=\s*\*|[:^]\s*\*|=|:|\^)/i
 MOTOR_Q: /[PVF](?![A-Z0-9(]|\s*[-+(.0-9$])/i
 OPEN_LOOP: /O(?=\s*[-0-9(])/i
 PLC_VERB.2: /(ENABLE|ENA|DISABLE|DIS|PAUSE|RESUME)(?![A-Z])/i
@@ -202,6 +203,7 @@ HOME_KW.2: /(HOMEZ|HOME|HMZ|HM)(?![A-Z])/i
 OTHER_ON.1: /@OTHER_ONLINE@/i
 OTHER_PROG.1: /@OTHER_PROGRAM@/i
 REST: /[^;\r\n]+/
+PORT_SELECT.2: /##\s*[0-9]*|@\s*[0-9A-F]?(?![0-9A-Z])/i
 OTHER_SYM: /(\$\$\$\*\*\*|\$\$\$|\$\$\*|\$\$|\$\*|\$|\?\?\?|\?\?|\?)(?![0-9A-F])/i
 _N: /[NO](?=\s*[0-9])/i
 _IF: /IF(?![A-Z])/i
@@ -215,8 +217,8 @@ _GOTO: /GOTO(?![A-Z])/i
 _GOSUB: /GOSUB(?![A-Z])/i
 _CALL: /CALL(?![A-Z])/i
 _RETURN: /(RETURN|RET)(?![A-Z])/i
-_CMD: /(COMMAND|CMD)(?![A-Z])/i
-SEND_KW: /SEND[12SPCA]?(?![A-Z0-9])/i
+_CMD: /(COMMAND|CMD)[SPRA]?(?![A-Z])/i
+SEND_KW: /SEND[12SPCRA]?(?![A-Z0-9])/i
 _DISPLAY: /(DISPLAY|DISP)(?![A-Z])/i
 _ADDRESS: /(ADDRESS|ADR)(?![A-Z])/i
 _NORMAL: /(NORMAL|NRM)(?![A-Z])/i
@@ -244,16 +246,20 @@ PVAR: /P[0-9]+/i
 QVAR: /Q[0-9]+/i
 MVAR: /M[0-9]+/i
 VARIND: /[IPQM](?=\s*\()/i
-CMP: "!=" | "<>" | "!>" | "!<" | ">=" | "<=" | ">" | "<"
-ADDOP: "+" | "-" | "|" | "^"
-MULOP: "*" | "/" | "%" | "&"
+CMP: "!=" | "<>" | "!>" | "!<" | "!~" | ">=" | "<=" | ">" | "<" | "~"
+ADDOP: "+" | "-" | "|"
+BITXOR.3: /\^(?!=)/
+_TRIGGER: /\^/
+MULOP: "*" | "/" | "%"
+BITAND.3: /&(?!=)/
+_CS_AMP: /&/
 INT: /[0-9]+/
 NUMBER: /[0-9]+\.[0-9]*|\.[0-9]+/
 SCALE: /[0-9]+(\.[0-9]*)?|\.[0-9]+/
 HEX: /\$[0-9A-F]+/i
 ADDRESS_OF: /@I[0-9]+/i
 STRING: /"[^"]*"/
-CTRL: /\^[A-Z]/i | /[\x01-\x08\x0b\x0e-\x1a]/
+CTRL: /\^[A-Z@\[\\\]^_]/i | /[\x01-\x08\x0b\x0e-\x1a]/
 COMMENT: /;.*/
 
 %ignore COMMENT

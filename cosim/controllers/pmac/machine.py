@@ -275,8 +275,9 @@ class Pmac:
     CS_MODELLED = (87, 88, 89, 93, 94, 95)
     #: Motor variables the model acts on (RAPID speed, TA, TS: Ixx22, Ixx20, Ixx21).
     MOTOR_MODELLED = (20, 21, 22)
-    #: Global variables the model acts on: I10 (servo clock), I15 (degrees or radians), I68 (timers of active systems).
-    GLOBAL_MODELLED = (10, 15, 68)
+    #: Global variables the model acts on: I5 (which PLCs run), I10 (servo clock), I15 (degrees or radians),
+    #: I68 (timers of active systems).
+    GLOBAL_MODELLED = (5, 10, 15, 68)
 
     def set_ivar(self, number: int, value: int | Fraction, *, where: str = "") -> None:
         """Write I-variable ``number`` (like typing ``In=value``; at run time from the host).

@@ -355,7 +355,7 @@ class PlcControl(Stmt):
 
 @dataclass(frozen=True)
 class Jog(Stmt):
-    """``J+``, ``J-``, ``J/``, ``J=``, ``J=n``, ``J:n``, ``J^n`` of the addressed motor."""
+    """``J+ J- J/ J! J= J=n J:n J^n J=* J:* J^*`` of the addressed motor."""
 
     kind: str
     value: Expr | None

@@ -77,7 +77,9 @@ MAX_BLOCKS = 32
 CODE_PROGRAMS = {"G": 1000, "M": 1001, "T": 1002, "D": 1003}
 
 _OPEN_HEAD = re.compile(r"\s*OPEN\s*(?:(?:PROGRAM|PROG|PLCC|PLC|FORWARD|FWD|INVERSE|INV)(?![A-Z])\s*(?:\d+)?"
-                        r"|(?:BINARY\s+)?ROTARY(?![A-Z]))\s*(?:CLEAR(?![A-Z]))?", re.IGNORECASE)
+                        r"|(?:BINARY\s+)?(?:ROTARY|ROT)(?![A-Z]))\s*(?:CLEAR(?![A-Z]))?", re.IGNORECASE)
+_ROTARY_NUMBER = re.compile(r"\s*([0-9$][0-9A-F]*)", re.IGNORECASE)
+_CS_PREFIX = re.compile(r"(?:\s*&\s*[0-9]+)*")
 _CLOSE_WORD = re.compile(r"(?<![A-Z0-9_])CLOSE(?![A-Z0-9_])", re.IGNORECASE)
 
 
@@ -237,8 +239,14 @@ class _Reader:
             if len(statements) != 1 or not isinstance(opened, OpenBuffer):  # the grammar read it otherwise
                 raise (statements[-1].pos if statements else line.pos(column)).error(
                     f"{text[:head.end()].strip()!r} is not an OPEN of a buffer")
-            self.current = _Open(opened, opened.clear)
             rest = text[head.end():]
+            number = _ROTARY_NUMBER.match(rest) if opened.kind == "ROTARY" else None
+            if number is not None:
+                raise line.pos(column + head.end() + number.start(1)).error(
+                    f"OPEN ROTARY {number.group(1)}: a rotary buffer takes no number (OPEN ROTARY opens every "
+                    "coordinate system's rotary buffer; &n chooses the one that takes the lines, &n DEFINE ROT n "
+                    "gives its size)")
+            self.current = _Open(opened, opened.clear)
             if rest.strip():
                 self.program(rest, line, column + head.end())
             return
@@ -249,12 +257,16 @@ class _Reader:
                 self.items.append(stmt)
 
     def program(self, text: str, line: Line, column: int = 1) -> None:
+        opened = self.current
+        assert opened is not None
+        select = _CS_PREFIX.match(text) if opened.stmt.kind == "ROTARY" else None
+        if select is not None and select.end() > 0:  # &n X10 Y10: the line goes to &n's rotary buffer
+            parse_line(text[:select.end()], context="online", source=line.source, line=line.line, column=column)
+            text, column = text[select.end():], column + select.end()
         close = _close_in(text)
         before = text if close is None else text[:close]
         statements = parse_line(before, context="program", source=line.source, line=line.line, column=column) \
             if before.strip() else []
-        opened = self.current
-        assert opened is not None
         for index, stmt in enumerate(statements):
             if isinstance(stmt, Clear):
                 if index > 0 or opened.lines:
@@ -357,7 +369,7 @@ class _Compiler:
 
     @property
     def title(self) -> str:
-        return f"{self.kind} {self.number}"
+        return "the rotary buffer" if self.kind == "ROTARY" else f"{self.kind} {self.number}"
 
     def depth_check(self, stmt: Stmt, inline: list[_Frame]) -> None:
         if len(self.blocks) + len(inline) >= MAX_BLOCKS:
@@ -369,7 +381,7 @@ class _Compiler:
         continued = self.last_test
         self.last_test = None
         for index, stmt in enumerate(statements):
-            if self.kind != "PROG" and isinstance(stmt, (*MOTION_ONLY, Call)):
+            if self.kind not in ("PROG", "ROTARY") and isinstance(stmt, (*MOTION_ONLY, Call)):
                 raise stmt.pos.error(f"{keyword(stmt)} is a motion-program statement, not allowed in {self.title}")
             if isinstance(stmt, Cont):
                 if index != 0 or continued is None:

@@ -38,8 +38,16 @@ of it is at most one scan period (the stale-capture hazard of the Turbo manual d
 ``docs/pmac.md``).
 
 PLC programs are disabled after ``OPEN PLC`` and start with ``ENABLE PLC n`` (from the top);
-``DISABLE PLC n`` stops one, ``PAUSE PLC n`` / ``RESUME PLC n`` stop and go on where it was
-(I5 is stored, not modelled: every enabled PLC runs).
+``DISABLE PLC n`` stops one, ``PAUSE PLC n`` / ``RESUME PLC n`` stop and go on where it was.
+``ENABLE``/``DISABLE``/``PAUSE``/``RESUME`` of a number that holds no PLC program (``DISABLE PLC
+2..31`` over a project's few PLCs) does nothing to it, as on the controller; the run's notes say so.
+
+**I5** (PLC program control; range 0..3, default 1 in the Turbo reference) permits what an enabled
+PLC needs to run: bit 0 the foreground PLC 0 (and PLCC 0), bit 1 the background PLC 1..31 (and
+PLCC 1..31). So at the default (1) PLC 0 runs and the background PLCs do not, however enabled; a
+project that uses background PLCs sets I5 = 2 or 3. I5 is read at every scan (a program may
+change it; the background wakes on the write). A PLC enabled when the servo clock starts (or
+enabled later) that I5 keeps off is listed in the run's notes with the place of its ``ENABLE``.
 """
 
 from __future__ import annotations
@@ -131,6 +139,8 @@ class Programs(Commands):
         self._lines: dict[tuple[str, int], list[tuple[Stmt, ...]]] = {}
         self._uses: list[tuple[int, int, Pos]] = []
         self._compiled: dict[int, Compiled] = {}
+        self._enabled_at: dict[int, Pos] = {}  # where each PLC was last enabled (for the I5 note)
+        self._scanning = False
 
     # -- compiled code -------------------------------------------------------------------------
     def compiled(self, code: Code) -> Compiled:
@@ -268,7 +278,11 @@ class Programs(Commands):
 
     # -- starting motion programs ------------------------------------------------------------------
     def begin(self, cs_number: int, number: int, pos: Pos) -> None:
-        """``&x Bn``: point coordinate system x at the top of motion program n."""
+        """``&x Bn``: point coordinate system x at the top of motion program n (B0: its rotary buffer)."""
+        if number == 0:
+            self.not_modelled(f"&{cs_number} B0", "the rotary buffer (not run)", str(pos))
+            self.selected[cs_number] = 0
+            return
         code = self.program(number, pos)
         self.check_program_axes(cs_number, code)
         cs = self.pmac.coordinate_system(cs_number)
@@ -290,6 +304,9 @@ class Programs(Commands):
         number = self.selected.get(cs_number)
         if number is None:
             raise pos.error(f"R: coordinate system {cs_number} has no program to run (point it at one with B n)")
+        if number == 0:
+            self.not_modelled(f"&{cs_number} R", "run of the rotary buffer (not modelled: nothing runs)", str(pos))
+            return
         modes = self.modes.get(cs_number)
         if modes is None:
             base = 5000 + 100 * cs_number
@@ -314,12 +331,16 @@ class Programs(Commands):
 
     # -- PLCs ---------------------------------------------------------------------------------
     def plc_control(self, stmt: PlcControl) -> None:
-        """``ENABLE``/``DISABLE``/``PAUSE``/``RESUME`` ``PLC`` n,m..k."""
+        """``ENABLE``/``DISABLE``/``PAUSE``/``RESUME`` ``PLC`` n,m..k (numbers with no PLC: no effect)."""
+        self.note_missing(stmt)
         for number in stmt.plcs:
             plc = self.plcs.get(number)
             if plc is None:
-                known = ", ".join(str(n) for n in sorted(self.plcs)) or "none"
-                raise stmt.pos.error(f"PLC {number} does not exist (PLC programs: {known})")
+                continue  # the controller accepts it: there is nothing to enable or disable
+            if stmt.verb == "ENABLE":
+                self._enabled_at[number] = stmt.pos
+                if self._scanning and not self.i5_permits(number):
+                    self._note_i5(number)
             if stmt.verb == "ENABLE" and number not in self.enabled:
                 plc.restart(plc.context.code)
                 self.enabled.add(number)
@@ -331,6 +352,27 @@ class Programs(Commands):
             elif stmt.verb == "RESUME":
                 self.paused.discard(number)
         self.wake()
+
+    def note_missing(self, stmt: PlcControl) -> None:
+        """List the numbers of ``stmt`` that hold no PLC program in the run's notes (it does nothing to them)."""
+        missing = tuple(number for number in stmt.plcs if number not in self.plcs)
+        if missing:
+            known = ", ".join(str(n) for n in sorted(self.plcs)) or "none"
+            self.pmac.sim.notes.add(
+                f"{self.pmac.device}: {stmt.verb} PLC{'C' if stmt.compiled else ''} at {stmt.pos}: no PLC program "
+                f"{_numbers(missing)} (no effect on {'it' if len(missing) == 1 else 'them'}; PLC programs: {known})",
+                key=f"PLC missing {self.pmac.device} {stmt.pos}")
+
+    def _note_i5(self, number: int) -> None:
+        """PLC ``number`` is enabled but I5 keeps it off: say so in the run's notes."""
+        self.pmac.sim.notes.add(
+            f"{self.pmac.device}: ENABLE PLC {number} at {self._enabled_at[number]}: I5 = {self.pmac.get_ivar(5)} "
+            f"keeps {'PLC 0 (foreground)' if number == 0 else 'the background PLCs 1..31'} off (the PLC runs when "
+            f"I5 is {'1 or 3' if number == 0 else '2 or 3'})", key=f"I5 {self.pmac.device} {number}")
+
+    def i5_permits(self, number: int) -> bool:
+        """I5 lets PLC ``number`` run: bit 0 for the foreground PLC 0, bit 1 for the background PLC 1..31."""
+        return bool(int(self.pmac.get_ivar(5)) & (1 if number == 0 else 2))
 
     def configure_scan(self, *, period: int | None = None, offset: int | None = None) -> None:
         """Background scan period and offset [ticks] (see the module docstring)."""
@@ -360,7 +402,7 @@ class Programs(Commands):
 
     def foreground(self) -> None:
         """PLC 0, once per servo cycle."""
-        if 0 in self.enabled and 0 not in self.paused:
+        if 0 in self.enabled and 0 not in self.paused and self.i5_permits(0):
             self.plcs[0].scan()
 
     def background(self) -> Generator[Any, Any, None]:
@@ -377,7 +419,7 @@ class Programs(Commands):
                 continue  # a repeat of the quiet round before: nothing to do
             self._dirty = False
             quiet = True
-            for number in sorted(self.enabled):
+            for number in sorted(self.enabled) if self.i5_permits(1) else ():
                 if number != 0 and number in self.enabled and number not in self.paused:
                     quiet = self.plcs[number].scan() and quiet
             if quiet and not sim.env.look_aheads:  # the next rounds would repeat this one: wait for a change
@@ -419,13 +461,10 @@ class Programs(Commands):
                     session.cs = int(number)
             elif isinstance(stmt, Begin):
                 number = constant(stmt.number)
-                if number is not None:
+                if number is not None and number != 0:  # B0: the rotary buffer (not run)
                     self.check_program_axes(session.cs, self.program(int(number), stmt.pos))
             elif isinstance(stmt, PlcControl):
-                for number in stmt.plcs:
-                    if number not in self.plcs:
-                        known = ", ".join(str(n) for n in sorted(self.plcs)) or "none"
-                        raise stmt.pos.error(f"PLC {number} does not exist (PLC programs: {known})")
+                self.note_missing(stmt)
             for var in stmt_variables(stmt):
                 self._check_var(var)
 
@@ -459,8 +498,26 @@ class Programs(Commands):
     def start(self) -> None:
         """Check everything and start the background scans (if there are PLC programs)."""
         self.check()
+        self._scanning = True
+        for number in sorted(self.enabled):
+            if not self.i5_permits(number):
+                self._note_i5(number)
         if any(number != 0 for number in self.plcs):
             self.pmac.sim.process(self.background())
+
+
+def _numbers(numbers: tuple[int, ...]) -> str:
+    """``2..4, 7`` for (2, 3, 4, 7)."""
+    parts: list[str] = []
+    start = previous = numbers[0]
+    for number in (*numbers[1:], None):
+        if number is not None and number == previous + 1:
+            previous = number
+            continue
+        parts.append(str(start) if start == previous else f"{start}..{previous}")
+        if number is not None:
+            start = previous = number
+    return ", ".join(parts)
 
 
 __all__ = ["BACKGROUND", "PLC_SCAN_PERIOD_NS", "CommandLine", "Context", "Programs", "Session"]

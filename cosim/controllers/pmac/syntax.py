@@ -102,6 +102,7 @@ VAR_LAST = 8191
 CS_RANGE = (1, 16)
 MOTOR_RANGE = (1, 32)
 PROG_RANGE = (1, 32767)
+BEGIN_RANGE = (0, 32767)  # B0 points a coordinate system at its rotary buffer
 PLC_RANGE = (0, 31)
 LABEL_RANGE = (0, 99999)
 #: Highest register address of the 24-bit address space.
@@ -260,7 +261,7 @@ class _Converter:
                 literal = Neg(literal)
             return Assign(pos, Var("P", 0, pos), literal)
         if kind == "begin":
-            return Begin(pos, self.numbered(kids[0], "program number (Bn)", PROG_RANGE, pos))
+            return Begin(pos, self.numbered(kids[0], "program number (Bn; B0: the rotary buffer)", BEGIN_RANGE, pos))
         if kind == "cs_command":
             return CsCommand(pos, str(kids[0]).upper())
         if kind == "percent":
@@ -283,7 +284,7 @@ class _Converter:
         if kind == "plc_control":
             return self.plc_control(pos, kids)
         if kind == "jog":
-            jog = str(kids[0]).upper()
+            jog = re.sub(r"\s", "", str(kids[0])).upper()
             return Jog(pos, jog, self.data(kids[1]) if kids[1] is not None else None)
         if kind == "motor_report":
             return MotorReport(pos, str(kids[0]).upper())
@@ -299,7 +300,10 @@ class _Converter:
             motors = self.plc_numbers(kids[1], "motor of HOME", MOTOR_RANGE, pos) if kids[1] is not None else ()
             return Home(pos, str(kids[0]).upper(), motors)
         if kind in ("other_online", "other_program"):
-            return Other(pos, str(kids[0]).upper(), " ".join(str(k).strip() for k in kids if k is not None))
+            text = " ".join(str(k).strip() for k in kids if k is not None)
+            if isinstance(kids[0], Token) and kids[0].type == "PORT_SELECT":  # ##n: motor group; @n: card
+                return Other(pos, "##" if text.startswith("##") else "@", re.sub(r"\s", "", text).upper())
+            return Other(pos, str(kids[0]).upper(), text)
         if kind == "label":
             return Label(pos, _range(_int(kids[0]), "label N", LABEL_RANGE, pos))
         if kind == "mod_assign":
