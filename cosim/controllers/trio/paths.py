@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cached_property
 
 from cosim.controllers.trio.profile import sqrt_down
 from cosim.controllers.trio.trig import atan2, cos_sin, pi_down
@@ -113,9 +114,9 @@ class ArcPath:
         sweep = -turn if clockwise else turn
         return cls((e1, e2), (c1, c2), clockwise, radius, a0, sweep)
 
-    @property
+    @cached_property
     def length(self) -> Fraction:
-        """Arc length [units]: radius * |sweep|."""
+        """Arc length [units]: radius * |sweep| (computed once: every servo cycle of the arc asks)."""
         return self.radius * abs(self.sweep)
 
     def offset(self, s: Fraction) -> tuple[Fraction, ...]:
