@@ -127,6 +127,7 @@ class Axis:
                                                "later", announces_ends=True)
             self.dir = Signal(self.sim, f"{self.prefix}.dir", kind="bit",
                               description="direction output (1 = positive)")
+            self.step.pull = lambda: self.sync()  # a stepper coupling brings the servo ticks up to date first
         return self.step, self.dir
 
     # -- positions ----------------------------------------------------------------------------

@@ -11,11 +11,20 @@ only where the outcome can depend on something else; the others are *implicit*:
   runs): whatever could change something comes from such an event, and the tick after it is
   explicit, exactly as before.
 * **In a straight move** (``MOVE``, ``MOVEABS``, ``FORWARD``, ``REVERSE``, a CANCEL's stop) on axes
-  whose outputs nobody listens to as they happen (no stepper plant on the step output, no speed-linked
-  PWM), the cycles up to the next event, the cycle in which the move ends, or the cycle in which a
-  gate position is reached, are computed in closed form (:func:`materialize`): the same demand
-  positions, step segments, MPOS, VP_SPEED and PWM_ENCODER counts, written with the instants they
-  have, in one pass of integer arithmetic per axis, when they are needed.
+  whose outputs nobody listens to as they happen, or whose step pulses go only to plants that take
+  them when they need them (a stepper coupling on the segments way, which *pulls* them before its
+  plant steps: :attr:`cosim.signals.PulseTrain.pull`), the cycles up to the next event, the cycle in
+  which the move ends, the cycle in which a gate position is reached, the cycle after which a run of
+  pulses to a plant would end, or the cycle that would change a speed-linked PWM mark, are computed
+  in closed form (:func:`materialize`): the same demand positions, step segments, MPOS, VP_SPEED and
+  PWM_ENCODER counts, written with the instants they have, in one pass of integer arithmetic per
+  axis, when they are needed. A pulled axis hands its segments to the plants as runs announced at
+  their ticks (:meth:`~cosim.signals.PulseTrain.emit_run`); where the plant's rows fill up, it is
+  stepped to the tick that filled them, as the explicit ticks would have.
+* Programs **waiting** for move-buffer space, ``WAIT IDLE`` or ``WAIT LOADED`` are released only at a
+  tick where a move ends (explicit); a ``WAIT UNTIL`` whose condition reads only memory (VR, TABLE,
+  the program's variables: :class:`MemoryPoll`) stays false until a program writes memory, which
+  is an event that bounds the window, so its checks at the ticks in between do not.
 
 *Needed* means: before anything reads or changes the controller (every entry point calls
 :meth:`ServoLoop.sync`, which brings the implicit ticks up to *now* up to date; a command or an input
@@ -26,8 +35,10 @@ not bound a window: by the kernel's convention they read plants, never a control
 Why it is exact: an implicit tick is always strictly before the next event that could observe or
 change the controller (a window ends at the first tick at or after that event's instant, and that tick
 is explicit, ordered with the event by the kernel's priorities), and every output of an implicit tick
-that something else consumes as it happens (step pulses to a plant, a speed-linked mark, a gate edge)
-either rules the window out or ends it. The per-signal digests of every bundled run are unchanged.
+that something else consumes as it happens (step pulses to a plant that does not pull them, a change of
+a speed-linked mark, a gate edge) either rules the window out or ends it; a plant that pulls gets every
+segment before it steps (a plant with watched outputs, which looks ahead, rules pulling out). The
+per-signal digests of every bundled run are unchanged.
 """
 
 from __future__ import annotations
@@ -36,6 +47,7 @@ from typing import TYPE_CHECKING
 
 from simpy.events import Event
 
+from cosim.controllers.trio.pwm import PwmMode
 from cosim.kernel import At
 from cosim.timebase import Priority
 
@@ -44,9 +56,17 @@ if TYPE_CHECKING:
     from cosim.controllers.trio.controller import TrioController
     from cosim.controllers.trio.counter import StepCounter
     from cosim.controllers.trio.motion import Move
+    from cosim.signals import PulseTrain
     from cosim.trace import Trace
 
 _HALF_WRAP = 1 << 27  # a window never spans this many counts (the gate's 29-bit wrap stays far)
+_SCAN_CYCLES = 512  # a window with pulled axes or a speed-linked mark looks this many cycles ahead at most
+
+
+class MemoryPoll(At):
+    """A ``WAIT UNTIL`` check at a servo tick whose condition reads only memory (VR, TABLE, the program's own
+    variables and constants): it cannot observe or change the controller, and it stays false until an
+    event that writes memory (which bounds a window) has happened, so it does not bound a window."""
 
 
 class ServoLoop:
@@ -74,6 +94,7 @@ class ServoLoop:
         self._window: list[Move] = []
         self.implicit = 0  # ticks computed in closed form so far
         self.skipped = 0  # ticks at rest not run
+        self._materializing = False
         # as a process started now would first run: after the events already due now (URGENT, like SimPy's)
         self.sim.call_at(self.sim.now, Priority.URGENT, lambda: self._schedule(self.k_next))
         self.sim.on_stop(lambda t: self.sync(t, at_now=False))
@@ -109,9 +130,7 @@ class ServoLoop:
             window = self._lazy_moves()
             if window is not None:
                 t_next = self._next_event_time()
-                k_end = self._window_end(window, k)
-                if t_next is not None:
-                    k_end = min(k_end, max(k, -(-t_next // period)))
+                k_end = self._window_end(window, k, k + (1 << 40) if t_next is None else max(k, -(-t_next // period)))
                 if k_end > k + 1:
                     self._window = window
                     self._schedule(k_end)
@@ -126,7 +145,7 @@ class ServoLoop:
         best = None
         for t, priority, _, event in self.sim.env._queue:
             if (priority != Priority.SAMPLE and not getattr(event, "cancelled", False) and event is not self._event
-                    and (best is None or t < best)):
+                    and type(event) is not MemoryPoll and (best is None or t < best)):
                 best = t
         return None if best is None else int(best)
 
@@ -137,13 +156,19 @@ class ServoLoop:
         window does so from a plant sample (SAMPLE, after the servo at the same instant); a change of
         the controller (:meth:`wake`) and the end of a run come before it.
         """
+        if self._materializing:
+            return  # a coupled plant steps while the window's segments are handed over (its rows were full)
         if now is None:
             now = self.sim.now
         k_last = min(now // self.period if at_now else -(-now // self.period) - 1, self.k_next - 1)
         if k_last <= self.k_done:
             return
         if self._window:
-            materialize(self.controller, self._window, self.k_done + 1, k_last + 1)
+            self._materializing = True
+            try:
+                materialize(self.controller, self._window, self.k_done + 1, k_last + 1)
+            finally:
+                self._materializing = False
             self.implicit += k_last - self.k_done
         self.k_done = k_last
 
@@ -161,7 +186,7 @@ class ServoLoop:
         controller = self.controller
         buffers = controller.buffers
         running = buffers._running
-        if not running or buffers._move_waiters:
+        if not running:  # programs waiting for buffer space, WAIT IDLE, WAIT LOADED: released only where a move ends
             return None
         moving: set[int] = set()
         for move in running:
@@ -174,7 +199,7 @@ class ServoLoop:
                 return None
         for number, axis in controller.axes.items():
             if number in moving:
-                if not _unobserved(axis) or axis.supervised:
+                if not (_unobserved(axis) or _pulled(axis)) or axis.supervised:
                     return None
             elif not axis.quiet:
                 return None
@@ -182,14 +207,18 @@ class ServoLoop:
             if gate.has_waiting:
                 return None
         for pwm in controller._pwms:
-            if pwm.link is not None and pwm.link.link_axis in moving:
+            link = pwm.link
+            if link is not None and link.link_axis in moving and not (
+                    pwm.mode == PwmMode.LINKED and pwm.mark_out._wanted == pwm.mark == pwm.mark_out.signal.value):
                 return None
         return running
 
-    def _window_end(self, moves: list[Move], k: int) -> int:
-        """The first tick from ``k`` on that must be explicit: a move's last cycle, a gate edge, a
-        following error that might be reached."""
-        end = k + (1 << 40)
+    def _window_end(self, moves: list[Move], k: int, end: int) -> int:
+        """The first tick from ``k`` on (``end`` at the latest: the next event) that must be explicit: a move's
+        last cycle, a gate edge, a following error that might be reached, the end of a run of pulses a
+        plant takes, a change of a speed-linked mark."""
+        if end <= k + 1:
+            return end
         axes = self.controller.axes
         for move in moves:
             cycle = move._cycle
@@ -206,7 +235,51 @@ class ServoLoop:
                 gate = axis.gate
                 if gate is not None and axis.feeds_gate and gate.gating and gate.entries:
                     end = min(end, _gate_tick(move, index, gate, k, end))
+        for move in moves:
+            if end <= k + 1:
+                break
+            end = self._scan_end(move, k, end)
         return end
+
+    def _scan_end(self, move: Move, k: int, end: int) -> int:
+        """The window's end for a move whose pulses a plant takes (a pulled axis) or whose path speed sets a
+        PWM mark: the tick of the first cycle after which a run of pulses would end (the tick after it
+        announces the end, explicitly) or the mark would change; at most :data:`_SCAN_CYCLES` cycles on."""
+        controller = self.controller
+        straight = move._straight
+        cycle = move._cycle
+        assert straight is not None and cycle is not None
+        period = self.period
+        pulled = [(i, axis) for i, axis in enumerate(move.axis_objects)
+                  if i < len(straight) and axis.step is not None and axis.step._listeners and axis.stepper]
+        marks = [pwm for pwm in controller._pwms if pwm.link is not None and pwm.link.link_axis in move.axes]
+        if not pulled and not marks:
+            return end
+        last = min(end - k, _SCAN_CYCLES)
+        c0, p_prev = move.cycles, move._p_prev
+        tp, tq = move._period
+        den_v = cycle.den * tp
+        steps = [axis.steps_raw for _, axis in pulled]
+        running = [axis.emitted_at == (k - 1) * period for _, axis in pulled]  # a run of pulses goes on
+        for j in range(1, last + 1):
+            p = cycle.numerator(c0 + j)
+            for n, (i, _) in enumerate(pulled):
+                s, g, e = straight[i]
+                num = s + g * p
+                was = steps[n]
+                target = num // e if num >= was * e else -(-num // e)
+                if target != was:
+                    steps[n], running[n] = target, True
+                elif running[n]:
+                    return k + j - 1  # this cycle has no pulses after one that had: the tick that runs it
+            if marks:
+                v_num = (p - p_prev) * tq
+                for pwm in marks:
+                    assert pwm.link is not None
+                    if pwm.linked_mark(pwm.link, v_num, den_v) != pwm.mark:
+                        return k + j - 1
+            p_prev = p
+        return k + last
 
 
 def _unobserved(axis: Axis) -> bool:
@@ -217,6 +290,18 @@ def _unobserved(axis: Axis) -> bool:
         if signal is not None and signal._listeners:
             return False
     return axis.step is None or not axis.step._listeners
+
+
+def _pulled(axis: Axis) -> bool:
+    """The axis' pulses go to plants that take them when they need them (:attr:`PulseTrain.pull`), and nothing
+    else listens to its outputs as they happen."""
+    step = axis.step
+    if step is None or axis.pending_shift or axis.sim.env.look_aheads:
+        return False
+    for signal in (axis.dpos_out, axis.mpos_out, axis.vp_out, axis.dir):
+        if signal is not None and signal._listeners:
+            return False
+    return step.pull is not None and step.takes_runs and 0 < len(step._listeners) == step.pulling
 
 
 def _gate_tick(move: Move, index: int, gate: object, k: int, end: int) -> int:
@@ -374,8 +459,11 @@ def _materialize_axis(axis: Axis, trace: Trace, period: int, k_from: int, nums: 
         trace.extend(direction.name, dir_t, dir_v)
         direction.value = dir_value
     if step is not None and seg_t0:
-        trace.extend_segments(step.name, seg_t0, [period] * len(seg_t0), seg_n, seg_dir)
-        step.position += steps - axis.steps_raw
+        if step._listeners:  # a pulled axis (see _pulled): its plants take the runs of segments, as announced
+            _emit_runs(axis, step, period, seg_t0, seg_n, seg_dir)
+        else:
+            trace.extend_segments(step.name, seg_t0, [period] * len(seg_t0), seg_n, seg_dir)
+            step.position += steps - axis.steps_raw
     if counts:
         feedback._before, feedback.t0, feedback.duration, feedback.count, feedback.sign = (fb_before, fb_t0, fb_dur,
                                                                                            fb_count, fb_sign)
@@ -387,6 +475,18 @@ def _materialize_axis(axis: Axis, trace: Trace, period: int, k_from: int, nums: 
     axis.mnum, axis.mden = mnum, mden
     axis.dnum, axis.dden = dnum, dden
     axis.vnum, axis.vden = vps[-1], den_v
+
+
+def _emit_runs(axis: Axis, step: PulseTrain, period: int, seg_t0: list[int], seg_n: list[int],
+               seg_dir: list[int]) -> None:
+    """Hand the segments of the window's cycles to the train's listeners, as runs of contiguous segments of one
+    direction, each announced (``lead`` = the direction set-up) at its servo tick, as the ticks would have."""
+    first = 0
+    for i in range(1, len(seg_t0) + 1):
+        if i == len(seg_t0) or seg_t0[i] != seg_t0[i - 1] + period or seg_dir[i] != seg_dir[first]:
+            step.emit_run(seg_t0[first], period, seg_n[first:i], seg_dir[first], axis.dir_setup)
+            first = i
+    axis.emitted_at = seg_t0[-1] - axis.dir_setup
 
 
 def _feed_total(counter: StepCounter, t0: int, duration: int, count: int, sign: int, total: int) -> None:
