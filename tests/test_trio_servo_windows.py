@@ -165,8 +165,8 @@ def test_steppers_that_pull_their_pulses_see_the_same_pulses_in_closed_form(tmp_
     machine = folder / "engraver.toml"
     text = machine.read_text()
     for plant in ("stage_x", "stage_y"):
-        text = text.replace(f'[plant.{plant}]',
-                            f'[plant.{plant}]\nrecord = {{ variables = ["carriage_position", "angle"], period = "700 us" }}')
+        record = 'record = { variables = ["carriage_position", "angle"], period = "700 us" }'
+        text = text.replace(f"[plant.{plant}]", f"[plant.{plant}]\n{record}")
     machine.write_text(text)
     closed, implicit = _machine_digests(machine, shortcuts=True)
     explicit, none = _machine_digests(machine, shortcuts=False)
