@@ -19,7 +19,7 @@ from lark import Tree
 from lark import __version__ as lark_version
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
 
-from cosim.controllers.trio.grammar import GRAMMAR, TERMINALS, normalise_lines, parser
+from cosim.controllers.trio.grammar import GRAMMAR, PARSER_OPTIONS, TERMINALS, normalise_lines, parser
 from cosim.errors import ConfigurationError
 
 #: Syntax trees kept in the per-user cache at most (the oldest go first).
@@ -41,15 +41,17 @@ def parse_cached(text: str, name: str) -> Tree:
     """:func:`parse`, through the per-user cache of built grammars (:mod:`cosim.controllers.grammars`).
 
     A machine's program files are mostly the same from one run to the next: their trees are kept
-    under the SHA-256 of the grammar, the text and the lark and Python versions (a changed program or
-    grammar is a new file, never a stale tree), so a run loads them instead of building the parser and
-    parsing (about a millisecond instead of tens). Only a text that parses is kept (a syntax error is
-    reported by :func:`parse` every time); a file that cannot be read is parsed anew and replaced; a
-    cache that cannot be written only costs the parse. At most :data:`CACHED_TREES` trees are kept.
+    under the SHA-256 of the grammar and its parser options, the text and the lark and Python
+    versions (a changed program or grammar is a new file, never a stale tree), so a run loads them
+    instead of building the parser and parsing (about a millisecond instead of tens). Only a text
+    that parses is kept (a syntax error is reported by :func:`parse` every time); a file that cannot
+    be read is parsed anew and replaced; a cache that cannot be written only costs the parse. At most
+    :data:`CACHED_TREES` trees are kept.
     """
     from cosim.controllers.grammars import cache_folder
 
-    key = hashlib.sha256(repr((GRAMMAR, text, lark_version, sys.version_info[:2])).encode()).hexdigest()
+    key = hashlib.sha256(repr((GRAMMAR, sorted(PARSER_OPTIONS.items()), text, lark_version,
+                               sys.version_info[:2])).encode()).hexdigest()
     folder = cache_folder()
     path = folder / f"trio-tree-{key[:32]}.pickle"
     try:
