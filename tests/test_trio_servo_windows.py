@@ -124,6 +124,27 @@ def test_wait_until_sees_the_same_instants_in_closed_form(text: str, wait_ms: in
     assert any(name.startswith("trio.op.") for name in closed)
 
 
+ARC_AXES = ("FOR ax = {a} TO {b} STEP {step}\n  BASE(ax)\n  ATYPE = {atype}\n  SERVO = ON\n  UNITS = {units}\n"
+            "  SPEED = 150\n  ACCEL = 900\n  DECEL = 900\n  FE_LIMIT = 1000\nNEXT ax\nBASE({a}, {b})\n")
+
+
+@pytest.mark.parametrize("text", [
+    # quarter circles both ways, a full circle, a line between: stepper axes nobody listens to
+    ARC_AXES.format(a=0, b=1, step=1, atype=1, units=80)
+    + "MOVECIRC(10, 10, 10, 0, 0)\nMOVE(-3, 4)\nMOVECIRC(-10, -10, 0, -10, 1)\nMOVECIRC(0, 0, 7.5, 2.5, 0)\n"
+    "WAIT IDLE\n",
+    # on the PWM axes with the gate counting: an arc towards a gate position runs explicitly
+    ARC_AXES.format(a=3, b=2, step=-1, atype=35, units=16)
+    + "PWM_CONTROL(6) AXIS(3)\nPWM_CONTROL(5) AXIS(3)\nTABLE(0, 3, 7, 12, 20)\nPWM_CONTROL(3, 1, ON, 0, 3) AXIS(3)\n"
+    "MOVECIRC(20, 20, 20, 0, 0)\nMOVECIRC(-20, 20, 0, 20, 0)\nWAIT IDLE\n",
+])
+def test_arcs_give_the_same_trace_in_closed_form(text: str) -> None:
+    """A MOVECIRC's cycles computed in closed form (the sines and cosines of each cycle in integers) give every
+    signal, pulse by pulse, of every tick run."""
+    reads = [7 * MS, 450 * MS, 1200 * MS]
+    assert digests(text, reads, shortcuts=True) == digests(text, reads, shortcuts=False)
+
+
 def test_the_tn20_81_run_is_mostly_closed_form() -> None:
     """The note's program at its default speed: far fewer explicit ticks than servo periods."""
     sim = Simulation(seed=1)

@@ -1,4 +1,4 @@
-"""When the servo cycle runs: explicit ticks, ticks skipped at rest, and straight moves in closed form.
+"""When the servo cycle runs: explicit ticks, ticks skipped at rest, and moves in closed form.
 
 The controller's servo cycle (:meth:`TrioController._tick`) runs at ``k * SERVO_PERIOD``. Running
 it as a kernel event every period costs a Python pass per axis and per period, which for a job of
@@ -10,7 +10,8 @@ only where the outcome can depend on something else; the others are *implicit*:
   after the next event of the simulation (a program waking up, an input changing, a command between
   runs): whatever could change something comes from such an event, and the tick after it is
   explicit, exactly as before.
-* **In a straight move** (``MOVE``, ``MOVEABS``, ``FORWARD``, ``REVERSE``, a CANCEL's stop) on axes
+* **In a straight move** (``MOVE``, ``MOVEABS``, ``FORWARD``, ``REVERSE``, a CANCEL's stop) or an arc
+  (``MOVECIRC``, its cosines and sines per cycle in integers; not towards a gate position) on axes
   whose outputs nobody listens to as they happen, or whose step pulses go only to plants that take
   them when they need them (a stepper coupling on the segments way, which *pulls* them before its
   plant steps: :attr:`cosim.signals.PulseTrain.pull`), the cycles up to the next event, the cycle in
@@ -47,6 +48,7 @@ from typing import TYPE_CHECKING
 
 from simpy.events import Event
 
+from cosim.controllers.trio.paths import ArcPath
 from cosim.controllers.trio.pwm import PwmMode
 from cosim.kernel import At
 from cosim.timebase import Priority
@@ -190,8 +192,8 @@ class ServoLoop:
             return None
         moving: set[int] = set()
         for move in running:
-            if (move._straight is None or move.cancel_requested or move.modify_to is not None or move.done
-                    or not move.monotonic):
+            if ((move._straight is None and move._arc is None) or move.cancel_requested or move.modify_to is not None
+                    or move.done or not move.monotonic):
                 return None
             moving.update(move.axes)
         for move in buffers._queued:
@@ -234,6 +236,8 @@ class ServoLoop:
                     return k
                 gate = axis.gate
                 if gate is not None and axis.feeds_gate and gate.gating and gate.entries:
+                    if move._straight is None:
+                        return k  # an arc towards a gate position: explicit ticks
                     end = min(end, _gate_tick(move, index, gate, k, end))
         for move in moves:
             if end <= k + 1:
@@ -246,12 +250,13 @@ class ServoLoop:
         PWM mark: the tick of the first cycle after which a run of pulses would end (the tick after it
         announces the end, explicitly) or the mark would change; at most :data:`_SCAN_CYCLES` cycles on."""
         controller = self.controller
-        straight = move._straight
+        straight, arc = move._straight, move._arc
         cycle = move._cycle
-        assert straight is not None and cycle is not None
+        assert cycle is not None
         period = self.period
+        on_path = len(straight) if straight is not None else len(arc[1]) if arc is not None else 0
         pulled = [(i, axis) for i, axis in enumerate(move.axis_objects)
-                  if i < len(straight) and axis.step is not None and axis.step._listeners and axis.stepper]
+                  if i < on_path and axis.step is not None and axis.step._listeners and axis.stepper]
         marks = [pwm for pwm in controller._pwms if pwm.link is not None and pwm.link.link_axis in move.axes]
         if not pulled and not marks:
             return end
@@ -263,9 +268,21 @@ class ServoLoop:
         running = [axis.emitted_at == (k - 1) * period for _, axis in pulled]  # a run of pulses goes on
         for j in range(1, last + 1):
             p = cycle.numerator(c0 + j)
+            cs = None
+            if straight is None and pulled:
+                assert arc is not None
+                cs = ArcPath.cos_sin_at(p, arc[0])
+                if cs is None:
+                    return k + j - 1  # the arc's end (its last cycle runs explicitly anyway)
             for n, (i, _) in enumerate(pulled):
-                s, g, e = straight[i]
-                num = s + g * p
+                if cs is None:
+                    assert straight is not None
+                    s, g, e = straight[i]
+                    num = s + g * p
+                else:
+                    assert arc is not None
+                    s, g, e = arc[1][i]
+                    num = s + g * cs[i]
                 was = steps[n]
                 target = num // e if num >= was * e else -(-num // e)
                 if target != was:
@@ -338,7 +355,7 @@ def move_axis_steps(move: Move, index: int) -> tuple[int, int]:
 
 
 def materialize(controller: TrioController, moves: list[Move], k_from: int, k_to: int) -> None:
-    """Run the ticks ``k_from .. k_to - 1`` of ``moves`` in closed form (straight moves, unobserved axes).
+    """Run the ticks ``k_from .. k_to - 1`` of ``moves`` in closed form (lines and arcs, see the module doc).
 
     The same values as :meth:`TrioController._tick` gives, written with their instants: DPOS, MPOS and
     VP_SPEED at each tick, the step segment and direction of each cycle, the feedback and PWM_ENCODER
@@ -349,8 +366,7 @@ def materialize(controller: TrioController, moves: list[Move], k_from: int, k_to
     n = k_to - k_from
     for move in moves:
         cycle = move._cycle
-        straight = move._straight
-        assert cycle is not None and straight is not None
+        assert cycle is not None
         c0 = move.cycles
         ps = [cycle.numerator(c) for c in range(c0 + 1, c0 + n + 1)]
         tp, tq = move._period
@@ -360,19 +376,35 @@ def materialize(controller: TrioController, moves: list[Move], k_from: int, k_to
         for p in ps:
             vps.append((p - p_prev) * tq)
             p_prev = p
+        demands = _demands(move, ps)
         for index, a in enumerate(move.axes):
-            axis = controller.axes[a]
-            if index < len(straight):
-                s, g, e = straight[index]
-                _materialize_axis(axis, trace, period, k_from, [s + g * p for p in ps], e, vps, den_v)
-            else:
-                start = move.start_counts[index]
-                _materialize_axis(axis, trace, period, k_from, [start.numerator] * n, start.denominator, vps, den_v)
+            nums, den = demands[index]
+            _materialize_axis(controller.axes[a], trace, period, k_from, nums, den, vps, den_v)
         move.cycles = c0 + n
         move._p_prev = ps[-1]
         move.v_num, move.v_den = vps[-1], den_v
-        move.nums = [s + g * ps[-1] for s, g, _ in straight]
-        move.dens = [e for _, _, e in straight]
+        move.nums = [nums[-1] for nums, _ in demands]
+        move.dens = [den for _, den in demands]
+
+
+def _demands(move: Move, ps: list[int]) -> list[tuple[list[int], int]]:
+    """Each axis' demand numerators [counts] at the cycles whose path numerators are ``ps``, and their
+    denominator: a straight move's ``(S + G P) / E``, an arc's ``(N + M x) / E`` (:meth:`Move.advance`)."""
+    out: list[tuple[list[int], int]] = []
+    if move._straight is not None:
+        out = [([s + g * p for p in ps], e) for s, g, e in move._straight]
+    else:
+        assert move._arc is not None
+        terms, coefficients = move._arc
+        xs = [ArcPath.cos_sin_at(p, terms) for p in ps]
+        for i, (s, g, e) in enumerate(coefficients):
+            nums = []
+            for x in xs:
+                assert x is not None  # a window ends before the arc's last cycle
+                nums.append(s + g * x[i])
+            out.append((nums, e))
+    out += [([start.numerator] * len(ps), start.denominator) for start in move.start_counts[len(out):]]
+    return out
 
 
 def _materialize_axis(axis: Axis, trace: Trace, period: int, k_from: int, nums: list[int], den: int,
