@@ -9,13 +9,16 @@ long-minus-short method: the marginal real-time factor is
 * **trio_example**: the TN20-81 program with the Laser FMU sampled every 1 ms, 2 passes vs 20
   passes (4.4 s vs 43.9 s of machine time);
 * **engraver**: ``examples/trio_engraver/engraver.toml`` (two Stepper FMUs, the Laser FMU sampled
-  every 100 us, two BASIC processes), run to 0.5 s vs to its end at 4 s.
+  every 100 us, two BASIC processes), run to 0.5 s vs to its end at 4 s;
+* **line**: ``examples/trio_line/line.toml`` (the marking line: DATUM homing of a Stepper FMU lift,
+  CONNECT to the conveyor, REGIST, the Laser FMU sampled every 1 ms, three processes), run to 0.5 s
+  vs to its end at 5 s.
 
 Both runs of a pair are measured in the same process, one after the other, the short one first;
 the first pair is preceded by one untimed short run so that imports and FMU builds are not timed.
 ``--profile NAME`` prints the top functions of one long run by own time instead. Run::
 
-    .venv/bin/python bench/bench_trio.py [--repeat 3] [--only trio_example|engraver] [--profile NAME]
+    .venv/bin/python bench/bench_trio.py [--repeat 3] [--only trio_example|engraver|line] [--profile NAME]
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from cosim.runner import Result, run_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 ENGRAVER = ROOT / "examples" / "trio_engraver" / "engraver.toml"
+LINE = ROOT / "examples" / "trio_line" / "line.toml"
 
 
 @dataclass(frozen=True)
@@ -61,6 +65,10 @@ PAIRS = {
         "engraver (2 Stepper FMUs + Laser FMU, to 0.5 s vs to 4 s)",
         lambda: run_scenario(load(ENGRAVER), until="500 ms"),
         lambda: _checked(run_scenario(load(ENGRAVER)))),
+    "line": Pair(
+        "line (Stepper FMU lift + Laser FMU, to 0.5 s vs to 5 s)",
+        lambda: run_scenario(load(LINE), until="500 ms"),
+        lambda: _checked(run_scenario(load(LINE)))),
 }
 
 

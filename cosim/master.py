@@ -165,15 +165,18 @@ class Plant:
                 self._check_watched(now)
 
     def advance_ahead(self, t: int) -> None:
-        """Bring the FMU to tick ``t`` at or after now, for a coupling acting on a run of segments.
+        """Bring the FMU to tick ``t`` at or after its own time, for a coupling acting on a run of segments.
 
         Only where nothing else can happen in the simulation before ``t`` (see
         :meth:`cosim.signals.PulseTrain.emit_run`): the step is the one :meth:`advance` would make with
-        the clock at ``t``. A watched plant (which has a look-ahead, so never sees runs) is refused.
+        the clock at ``t``. ``t`` may be before now for segments a controller hands over late (a Trio's
+        servo ticks in closed form, :attr:`cosim.signals.PulseTrain.pull`), never before the FMU's time.
+        A watched plant (which has a look-ahead, so never sees runs) is refused.
         """
-        if t < self.sim.now or self._watched:
-            raise ConfigurationError(f"{self.name}: advance_ahead to t={t} ticks (now {self.sim.now}) is allowed only "
-                                     "at or after now, for a plant without watched outputs")
+        if t < self.fmu.t or self._watched:
+            raise ConfigurationError(f"{self.name}: advance_ahead to t={t} ticks (now {self.sim.now}, the FMU at "
+                                     f"{self.fmu.t}) is allowed only at or after the FMU's time, for a plant "
+                                     "without watched outputs")
         if self.fmu.t != t and self.fmu.terminated is None:
             self._advance_to(t)
 

@@ -132,6 +132,12 @@ class PulseTrain:
         self._end_listeners: list[EndListener] = []
         self.takes_runs = sim.trace.takes_runs(name)
         """True while the trace and every listener take runs of segments (:meth:`emit_run` may be used)."""
+        self.pull: Callable[[], None] | None = None
+        """Set by a controller that computes some segments only when they are needed (a Trio's servo ticks
+        in closed form): emits every segment due up to now. A listener that subscribed with ``pulls``
+        calls it before it acts on the segments so far (a stepper coupling, before its plant steps)."""
+        self.pulling = 0
+        """How many listeners pull (see :attr:`pull`)."""
         self.announces_ends = announces_ends
         """The controller calls :meth:`end_run` at or before the end of every segment that no segment
         continues (the next one does not start where it ends), so a listener need not watch each
@@ -141,7 +147,7 @@ class PulseTrain:
         self._record_run = sim.trace.segment_run_recorder(name)
 
     def subscribe(self, listener: SegmentListener, *, runs: RunListener | None = None,
-                  ends: EndListener | None = None) -> None:
+                  ends: EndListener | None = None, pulls: bool = False) -> None:
         """Call ``listener(train, t0, duration, count, direction)`` for every segment.
 
         ``runs``, if given, takes a run of segments in one call instead (:meth:`emit_run`):
@@ -151,9 +157,11 @@ class PulseTrain:
         before the last of those instants, so the listener may act for each segment as at its own
         instant (e.g. step a plant to it); the clock reads the first. A listener without ``runs``
         makes the train take single segments only (:attr:`takes_runs` false). ``ends``, if given, is
-        called as ``ends(train)`` by :meth:`end_run` (see :attr:`announces_ends`).
+        called as ``ends(train)`` by :meth:`end_run` (see :attr:`announces_ends`). ``pulls``: the listener
+        calls :attr:`pull` before it acts on the segments so far.
         """
         self._listeners.append(listener)
+        self.pulling += pulls
         if ends is not None:
             self._end_listeners.append(ends)
         if runs is None:

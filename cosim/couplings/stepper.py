@@ -211,6 +211,7 @@ class StepperCoupling:
     _write: Callable[[], None] | None = field(default=None, repr=False)
     _written: int = field(default=0, repr=False)  # rows holding a segment in the plant's value
     _dirty: bool = field(default=False, repr=False)
+    _train: PulseTrain | None = field(default=None, repr=False)  # the segments way: the train it pulls
 
     def on_segment(self, _train: PulseTrain, t0: int, duration: int, count: int, direction: int) -> None:
         """Segment listener: the pulses of ``[t0, t0 + duration)``, announced now (at or before ``t0``)."""
@@ -366,6 +367,9 @@ class StepperCoupling:
     # -- the segments way -------------------------------------------------------------------------
     def before_step(self, t: int) -> None:
         """Plant hook: write the rows before the plant steps to ``t``; forget those it places in that step."""
+        train = self._train
+        if train is not None and train.pull is not None:
+            train.pull()  # segments a controller computes when needed (PulseTrain.pull): up to now first
         rows = self._rows  # flat: t0, duration, signed pulses, t0, ...
         if self._dirty:
             array = self._array
@@ -466,13 +470,19 @@ def couple_stepper(port: StepDirPort, plant: PlantLike, *,
         plant.before_step(coupling.before_step)
     delay = port.active_delay
     coupling._ends = port.step.announces_ends
+    segments_way = coupling.way == "segments"
+    if segments_way:
+        coupling._train = port.step
     if delay:  # the drive counts at the active edge
         port.step.subscribe(lambda train, t0, duration, count, direction:
                             coupling.on_segment(train, t0 + delay, duration, count, direction),
-                            ends=coupling.on_end if coupling._ends else None)
+                            runs=(lambda train, t0, duration, counts, direction, lead:
+                                  coupling.on_run(train, t0 + delay, duration, counts, direction, lead + delay))
+                            if segments_way else None,
+                            ends=coupling.on_end if coupling._ends else None, pulls=segments_way)
     else:  # runs of segments on the segments way (the rate way sets inputs at each segment's instant)
-        port.step.subscribe(coupling.on_segment, runs=coupling.on_run if coupling.way == "segments" else None,
-                            ends=coupling.on_end if coupling._ends else None)
+        port.step.subscribe(coupling.on_segment, runs=coupling.on_run if segments_way else None,
+                            ends=coupling.on_end if coupling._ends else None, pulls=segments_way)
     return coupling
 
 

@@ -102,6 +102,9 @@ class Axis:
         self.vp_out = Signal(sim, f"{self.prefix}.vp_speed", kind="real", unit="units/s",
                              description="VP_SPEED: path speed of the move being executed")
         self.step: PulseTrain | None = None
+        #: The servo tick whose cycle emitted the last pulse segment (the controller announces the end of a run
+        #: of segments at the next tick without pulses: :meth:`PulseTrain.end_run`).
+        self.emitted_at: int | None = None
         self.dir: Signal | None = None
         self.invert_out: Signal | None = None
         self.pwm: PwmGenerator | None = None
@@ -121,9 +124,10 @@ class Axis:
             self.step = PulseTrain(self.sim, f"{self.prefix}.step", pulse_width=self.pulse_width,
                                    description="step output (ATYPE 1 or 35): each pulse drawn from its leading "
                                                "edge; the step counts at its trailing (active) edge, pulse_width "
-                                               "later")
+                                               "later", announces_ends=True)
             self.dir = Signal(self.sim, f"{self.prefix}.dir", kind="bit",
                               description="direction output (1 = positive)")
+            self.step.pull = lambda: self.sync()  # a stepper coupling brings the servo ticks up to date first
         return self.step, self.dir
 
     # -- positions ----------------------------------------------------------------------------
@@ -306,7 +310,9 @@ class Axis:
         change = num * self.dden - self.dnum * den
         self.moving = (change > 0) - (change < 0)
         self.dnum, self.dden = num, den
-        if not self.stepper:
+        params = self.params
+        atype = params["ATYPE"]
+        if atype != ATYPE_STEPPER and atype != ATYPE_STEPPER_PWM:  # not self.stepper
             return
         steps = self.steps_raw
         target = num // den if num >= steps * den else -(-num // den)
@@ -320,17 +326,20 @@ class Axis:
                 f"{period} ticks leave less than two pulse widths ({2 * self.pulse_width} ticks) between pulses; "
                 "lower SPEED or UNITS")
         direction = 1 if delta > 0 else 0
-        assert self.step is not None and self.dir is not None  # a stepper has its outputs (became_stepper)
-        self.dir.set(direction)
+        dir_out = self.dir
+        assert self.step is not None and dir_out is not None  # a stepper has its outputs (became_stepper)
+        if dir_out.value != direction:
+            dir_out.set(direction)
         leading = t0 + self.dir_setup
         self.step.emit(leading, period, count, direction)
+        self.emitted_at = t0
         self.steps_raw = target
         sign = 1 if delta > 0 else -1
         active = leading + self.pulse_width
-        if self.counts_steps:
+        if atype == ATYPE_STEPPER or params["SERVO"]:  # self.counts_steps
             self.feedback.feed(active, period, count, sign)
-        if self.gate is not None and self.params["ATYPE"] == ATYPE_STEPPER_PWM and self.params["SERVO"]:
-            self.gate.feed(active, period, count, sign)
+            if self.gate is not None and atype == ATYPE_STEPPER_PWM:  # self.feeds_gate
+                self.gate.feed(active, period, count, sign)
 
     def sample_mpos(self, now: int) -> None:
         """Servo tick, before the cycle's pulses: latch MPOS (the pulses counted so far)."""

@@ -24,7 +24,7 @@ from cosim.controllers.trio.controller import TrioController
 from cosim.controllers.trio.expressions import Declarations
 from cosim.controllers.trio.params import PROCESSES
 from cosim.controllers.trio.runtime import MAX_STATEMENTS_PER_SERVO_PERIOD, BasicError, BasicRun, Compiled
-from cosim.controllers.trio.syntax import parse
+from cosim.controllers.trio.syntax import parse, parse_cached
 from cosim.controllers.trio.values import Datum, Value, integer_part
 from cosim.errors import ConfigurationError
 
@@ -96,11 +96,12 @@ class BasicProgram:
         return cls(name, text, Compiler(name, declarations=shared, include=include).compile(tree))
 
     @classmethod
-    def parse_all(cls, sources: Sequence[tuple[str, str]], *, folder: str | Path | None = None
-                  ) -> list[BasicProgram]:
+    def parse_all(cls, sources: Sequence[tuple[str, str]], *, folder: str | Path | None = None,
+                  cached: bool = False) -> list[BasicProgram]:
         """Parse several ``(name, text)`` programs of one machine: each knows the others' CONSTANT and GLOBAL
-        names, and may INCLUDE them by name."""
-        trees = [(name, text, parse(text, name)) for name, text in sources]
+        names, and may INCLUDE them by name. ``cached``: keep and reuse their syntax trees in the per-user
+        cache (:func:`.syntax.parse_cached`; a machine's program files)."""
+        trees = [(name, text, (parse_cached if cached else parse)(text, name)) for name, text in sources]
         shared = Declarations()
         for name, _text, tree in trees:
             declarations_of(tree, shared, name)
@@ -120,7 +121,7 @@ class BasicProgram:
         """Parse the program files of one machine together (see :meth:`parse_all`)."""
         files = [Path(p) for p in paths]
         folder = files[0].parent if files else None
-        return cls.parse_all([(p.name, _read(p)) for p in files], folder=folder)
+        return cls.parse_all([(p.name, _read(p)) for p in files], folder=folder, cached=True)
 
     @property
     def key(self) -> str:

@@ -322,11 +322,12 @@ class Compiler(ExpressionCompiler):
     def s_wait_until(self, node: Tree, depth: int) -> None:
         condition = self.expr(node.children[0], 0)
         truth = ops.truth
+        memory_only = self.memory_only(node.children[0])
 
         def wait_until(run: BasicRun, pc: int) -> int:
             if truth(condition(run)):
                 return pc + 1
-            run.pending = run.next_servo_tick()
+            run.pending = run.next_servo_tick(memory_only=memory_only)
             return pc  # checked again at the next servo tick
 
         self.emit(node, wait_until)

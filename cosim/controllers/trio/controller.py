@@ -129,6 +129,7 @@ class TrioController(MotionCommands, ParameterAccess):
         self.pwm_outputs = {n: PwmOutput(sim, f"{self.axes[n].prefix}.pwm_out", self.pwm_port(n),
                                          clock_ticks=clock_ticks) for n in PWM_AXES}
         self.buffers = MoveBuffers(sim, self.axes, period_s=self.period_s)
+        self._axis_list = list(self.axes.values())  # axis n at index n
         self._gates = [ax.gate for ax in self.axes.values() if ax.gate is not None]
         self._pwms = [ax.pwm for ax in self.axes.values() if ax.pwm is not None]
         #: Running programs by process number, and the programs RUN can start by name.
@@ -173,28 +174,38 @@ class TrioController(MotionCommands, ParameterAccess):
 
     def _tick(self) -> None:
         now = self.sim.now
-        awake = [axis for axis in self.axes.values() if not axis.quiet]
-        for axis in awake:
-            axis.sample_mpos(now)
+        axes = self._axis_list
+        for axis in axes:  # 1. latch MPOS (Axis.sample_mpos, inline: this runs every tick)
+            if not axis.quiet:
+                if axis.params["ATYPE"] in STEPPER_ATYPES:
+                    axis.mnum, axis.mden = axis.feedback.value(now), 1
+                else:
+                    axis.mnum, axis.mden = axis.dnum, axis.dden
         for gate in self._gates:
-            if gate.has_waiting:
+            if gate._waiting:
                 gate.retry_waiting()
-        for axis in self.axes.values():
+        for axis in axes:
             if axis.supervised:
                 before_moves(self, axis)
         buffers = self.buffers
         if buffers.pending:
             buffers.load(now)
         buffers.run_cycle(now, self.period_ticks, self.period_s)
-        awake = [axis for axis in self.axes.values() if not axis.quiet]
+        for axis in axes:  # a run of pulse segments ends: the last tick emitted some, this one none
+            emitted = axis.emitted_at
+            if emitted is not None and emitted != now:
+                axis.emitted_at = None
+                axis.step.end_run()  # type: ignore[union-attr]  # an axis that emitted has its outputs
+        awake = [axis for axis in axes if not axis.quiet]
         for axis in awake:
-            axis.apply_offset()
+            if axis.pending_shift:
+                axis.apply_offset()
             if not within_range(axis):
                 wrap(axis)
         for pwm in self._pwms:
             link = pwm.link
             if link is not None:
-                link_axis = self.axes[link.link_axis]
+                link_axis = axes[link.link_axis]
                 pwm.servo_update_ratio(link_axis.vnum, link_axis.vden)
         for axis in awake:
             params = axis.params

@@ -156,6 +156,34 @@ class ExpressionCompiler:
             return ops.logical_not(operand)
         raise self.fail(node, f"cannot evaluate {kind}")  # pragma: no cover - the grammar has no other rules
 
+    def memory_only(self, node: Tree | Token) -> bool:
+        """The expression (compiled already) reads only memory: numbers, constants, VR (also by a GLOBAL name),
+        TABLE, the program's own variables and arrays; no parameter, input, time or other function."""
+        if isinstance(node, Token):
+            return True  # an operator
+        kind, kids = node.data, node.children
+        if kind in ("number", "hexnumber", "string", "on_const"):
+            return True
+        if kind == "ref":
+            token, mods = kids
+            name = str(token).upper()
+            if mods is not None and mods.children:
+                return False
+            declared = self.declarations
+            return (name in declared.constants or name in kw.CONSTANTS or name == "PI" or name in declared.globals
+                    or not (name in kw.PROCESS_PARAMS or name in kw.READABLE or name in kw.FUNCTIONS
+                            or name in kw.KEYWORDS))
+        if kind == "func":
+            token, *args, mods = kids
+            name = str(token).upper()
+            if (mods is not None and mods.children) or not (
+                    name in ("VR", "TABLE") or (name in self.arrays and name not in kw.FUNCTIONS)):
+                return False
+            return all(a is None or self.memory_only(a) for a in args)
+        if kind in ("sum", "term", "or_expr", "and_expr", "pow_expr", "compare", "equal", "neg", "not_op"):
+            return all(self.memory_only(k) for k in kids)
+        return False
+
     def ref(self, node: Tree) -> Expr:
         token, mods = node.children
         name = str(token).upper()

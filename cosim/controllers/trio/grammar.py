@@ -173,13 +173,17 @@ TERMINALS = {"_NL": "end of line", "NAME": "a name", "NUMBER": "a number", "HEXN
              "LSQB": "[", "RSQB": "]", "__ANON_0": "#", "$END": "end of program"}
 
 
+#: The options of the parser (the shape of its trees depends on them as on :data:`GRAMMAR`).
+PARSER_OPTIONS = {"parser": "lalr", "propagate_positions": True, "maybe_placeholders": True}
+
+
 @cache
 def parser() -> Lark:
     """The LALR parser of :data:`GRAMMAR`, built on the first call and kept (and cached on disk by
     :func:`cosim.controllers.grammars.lark_parser`, so a new process loads it instead of building it)."""
     from cosim.controllers.grammars import lark_parser
 
-    return lark_parser(GRAMMAR, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+    return lark_parser(GRAMMAR, **PARSER_OPTIONS)
 
 
 def normalise_lines(text: str) -> str:

@@ -29,6 +29,7 @@ from cosim import validate
 from cosim.controllers.trio.paths import ArcPath, LinearPath, PolylinePath, RayPath
 from cosim.controllers.trio.piecewise import CycleProfile, Piecewise, smoothed
 from cosim.controllers.trio.profile import Ramp, Stop, Trapezoid, plan_from
+from cosim.controllers.trio.trig import RESULT_BITS
 
 if TYPE_CHECKING:
     from cosim.controllers.trio.axis import Axis
@@ -80,6 +81,9 @@ class Move:
     _cycle: CycleProfile | None = field(default=None, repr=False)
     _p_prev: int = field(default=0, repr=False)
     _straight: list[tuple[int, int, int]] | None = field(default=None, repr=False)
+    #: An arc's cycle in integers: the terms of ArcPath.cos_sin_at, and (N, M, E) of its two axes' demands.
+    _arc: tuple[tuple[int, int, int, int, int], tuple[tuple[int, int, int], ...]] | None = field(default=None,
+                                                                                              repr=False)
     _period: tuple[int, int] = field(default=(1, 1000), repr=False)
     #: The path distance never decreases, and the largest path speed of the profile [units/s].
     monotonic: bool = True
@@ -131,6 +135,8 @@ class Move:
         path = self.path
         if isinstance(path, ArcPath | PolylinePath):
             self._straight = None
+            self._arc = (_arc_terms(path, self.start_counts, self.units, cycle.den)
+                         if isinstance(path, ArcPath) and len(self.start_counts) >= 2 else None)
             return
         assert path is not None
         if isinstance(path, RayPath):
@@ -296,6 +302,17 @@ class Move:
                     self.nums.append(start.numerator)
                     self.dens.append(start.denominator)
             return
+        arc = self._arc
+        if arc is not None:  # an arc's cycle in integers: demand_i = (N_i + M_i cs_i) / E_i, cs = cos, sin
+            cs = ArcPath.cos_sin_at(p, arc[0])
+            if cs is not None:
+                (n0, m0, e0), (n1, m1, e1) = arc[1]
+                self.nums = [n0 + m0 * cs[0], n1 + m1 * cs[1]]
+                self.dens = [e0, e1]
+                for start in self.start_counts[2:]:
+                    self.nums.append(start.numerator)
+                    self.dens.append(start.denominator)
+                return
         assert self.path is not None
         offsets = self.path.offset(Fraction(p, cycle.den))
         demands = [start + offset * units for start, offset, units in
@@ -303,6 +320,20 @@ class Move:
         demands += list(self.start_counts[len(demands):])
         self.nums = [d.numerator for d in demands]
         self.dens = [d.denominator for d in demands]
+
+
+def _arc_terms(path: ArcPath, start_counts: tuple[Fraction, ...], units: tuple[Fraction, ...], den: int
+               ) -> tuple[tuple[int, int, int, int, int], tuple[tuple[int, int, int], ...]]:
+    """The integers of an arc's demands at ``s = p / den``: with ``cs = (cos, sin) = x / 2**RESULT_BITS``
+    (:meth:`ArcPath.cos_sin_at`), axis ``i``'s demand ``start_i + (centre_i + r cs_i) units_i`` [counts] is
+    ``(N_i + M_i x_i) / E_i``, exactly the value :meth:`ArcPath.offset` gives."""
+    axes = []
+    for start, centre, unit in zip(start_counts, path.centre, units, strict=False):
+        a = start + centre * unit
+        b = path.radius * unit / (1 << RESULT_BITS)
+        e = lcm(a.denominator, b.denominator)
+        axes.append((a.numerator * (e // a.denominator), b.numerator * (e // b.denominator), e))
+    return path.cycle_terms(den), tuple(axes)
 
 
 def _speed_range(profile: Piecewise) -> tuple[Fraction, Fraction]:

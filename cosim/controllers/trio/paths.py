@@ -18,9 +18,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cached_property
 
 from cosim.controllers.trio.profile import sqrt_down
-from cosim.controllers.trio.trig import atan2, cos_sin, pi_down
+from cosim.controllers.trio.trig import WORK_BITS, atan2, cos_sin, cos_sin_fixed_of, pi_down
 from cosim.errors import ConfigurationError
 
 
@@ -113,10 +114,30 @@ class ArcPath:
         sweep = -turn if clockwise else turn
         return cls((e1, e2), (c1, c2), clockwise, radius, a0, sweep)
 
-    @property
+    @cached_property
     def length(self) -> Fraction:
-        """Arc length [units]: radius * |sweep|."""
+        """Arc length [units]: radius * |sweep| (computed once: every servo cycle of the arc asks)."""
         return self.radius * abs(self.sweep)
+
+    def cycle_terms(self, den: int) -> tuple[int, int, int, int, int]:
+        """The integers of :meth:`cos_sin_at` for distances ``p / den`` along the arc (see there)."""
+        length, radius, angle = self.length, self.radius, self.start_angle
+        sign = -1 if self.clockwise else 1
+        an, ad, rn, rd = angle.numerator, angle.denominator, radius.numerator, radius.denominator
+        return (length.numerator * den, length.denominator, an * den * rn, sign * rd * ad, ad * den * rn)
+
+    @staticmethod
+    def cos_sin_at(p: int, terms: tuple[int, int, int, int, int]) -> tuple[int, int] | None:
+        """``cos`` and ``sin`` of the angle after ``s = p / den`` along the arc, as integers ``x`` of the values
+        ``x / 2**RESULT_BITS`` that :func:`.trig.cos_sin` gives for it; None at or past the full length.
+
+        The same numbers as :meth:`offset`'s, in integers: the angle ``a0 + sign s / r`` is the one rational
+        ``(a0n den rn + sign p rd a0d) / (a0d den rn)``, made fixed point by one division.
+        """
+        length_den_num, length_den, angle_a, angle_b, angle_den = terms
+        if p * length_den >= length_den_num:
+            return None
+        return cos_sin_fixed_of((((angle_a + angle_b * p)) << WORK_BITS) // angle_den)
 
     def offset(self, s: Fraction) -> tuple[Fraction, ...]:
         """Displacement of the two axes after ``s`` along the arc [units]; the exact end at the full length."""

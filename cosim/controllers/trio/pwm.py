@@ -121,6 +121,7 @@ class PwmGenerator:
         self.cycle = 0
         self.mark = 0
         self.link: SpeedLink | None = None
+        self._link_terms: tuple[object, int, int, int] = (None, 0, 0, 1)  # the link and its integer terms
         self.cycle_out = SettledSignal(sim, f"{prefix}.pwm_cycle", kind="int", unit="clocks",
                                        description="PWM_CYCLE: mark+space period [20 MHz clocks]")
         self.mark_out = SettledSignal(sim, f"{prefix}.pwm_mark", kind="int", unit="clocks",
@@ -155,14 +156,22 @@ class PwmGenerator:
         """:meth:`servo_update` with ``vp_speed = v_num / v_den`` given as integers (the servo cycle's form)."""
         link = self.link
         if self.mode == PwmMode.LINKED and link is not None:
-            m, o = link.multiplier, link.offset
-            num = v_num * m.numerator * o.denominator + o.numerator * v_den * m.denominator * SPEED_LINK_DIVISOR
-            den = v_den * m.denominator * SPEED_LINK_DIVISOR * o.denominator
-            if den < 0:
-                num, den = -num, -den
-            mark = link.limit if num > link.limit * den else max(0, num // den)
-            if mark != self.mark or self.mark_out.value != (mark if self.on else 0):
+            mark = self.linked_mark(link, v_num, v_den)
+            if mark != self.mark or self.mark_out._wanted != (mark if self.mode != PwmMode.OFF else 0):
                 self.set_mark(mark)
+
+    def linked_mark(self, link: SpeedLink, v_num: int, v_den: int) -> int:
+        """The mark [clocks] ``link`` gives for ``VP_SPEED = v_num / v_den`` (:func:`linked_mark`, in integers)."""
+        if self._link_terms[0] is not link:
+            m, o = link.multiplier, link.offset
+            self._link_terms = (link, m.numerator * o.denominator, o.numerator * m.denominator * SPEED_LINK_DIVISOR,
+                                m.denominator * SPEED_LINK_DIVISOR * o.denominator)
+        _, a, b, c = self._link_terms
+        num = v_num * a + b * v_den  # VP_SPEED * multiplier / divisor + offset = num / den, exactly
+        den = v_den * c
+        if den < 0:
+            num, den = -num, -den
+        return link.limit if num > link.limit * den else max(0, num // den)
 
     def servo_update(self, vp_speed: Fraction) -> None:
         """Servo-cycle update of the speed link (``vp_speed`` of the link axis) [units/s]."""

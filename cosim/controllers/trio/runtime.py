@@ -40,6 +40,7 @@ import simpy
 from simpy.events import Event
 
 from cosim.controllers.trio.process import TrioProcess
+from cosim.controllers.trio.servo import MemoryPoll
 from cosim.controllers.trio.values import Datum, Value, typed
 from cosim.errors import ConfigurationError, TimingViolation
 from cosim.job import JobState
@@ -239,10 +240,11 @@ class BasicRun:
         except KeyError:
             raise BasicError(f"variable {name} is read before the program assigns it", 3) from None
 
-    def next_servo_tick(self) -> Event:
-        """An event at the next servo tick (after the servo cycle there)."""
+    def next_servo_tick(self, *, memory_only: bool = False) -> Event:
+        """An event at the next servo tick (after the servo cycle there); ``memory_only``: for a check that reads
+        only memory (a :class:`~.servo.MemoryPoll`, which the servo cycle's closed form does not stop at)."""
         period = self.controller.period_ticks
-        return At(self.sim.env, (self.sim.now // period + 1) * period, self.priority)
+        return (MemoryPoll if memory_only else At)(self.sim.env, (self.sim.now // period + 1) * period, self.priority)
 
     def call_gosub(self, return_pc: int) -> None:
         if len(self.gosubs) >= MAX_GOSUB_DEPTH:

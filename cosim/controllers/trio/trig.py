@@ -77,14 +77,20 @@ def _cos_sin_fixed(x: int) -> tuple[int, int]:
 
 def cos_sin(angle: Fraction) -> tuple[Fraction, Fraction]:
     """``(cos(angle), sin(angle))`` of an exact angle [rad], each rounded down to ``2**-64``."""
-    pi = _pi_fixed()
-    half_pi = pi // 2
-    x = _fixed(angle) % (4 * half_pi)
-    quadrant, rest = divmod(x, half_pi)
+    c, s = cos_sin_fixed_of(_fixed(angle))
+    return Fraction(c, 1 << RESULT_BITS), Fraction(s, 1 << RESULT_BITS)
+
+
+def cos_sin_fixed_of(angle_fixed: int) -> tuple[int, int]:
+    """:func:`cos_sin` of the angle ``angle_fixed / 2**WORK_BITS`` (rounded down from the exact angle), as the
+    integers ``x`` of the results ``x / 2**RESULT_BITS``."""
+    half_pi = _pi_fixed() // 2
+    quadrant, rest = divmod(angle_fixed % (4 * half_pi), half_pi)
     c, s = _cos_sin_fixed(rest)
     for _ in range(quadrant % 4):
         c, s = -s, c
-    return _result(c), _result(s)
+    shift = WORK_BITS - RESULT_BITS
+    return c >> shift, s >> shift
 
 
 def atan2(y: Fraction, x: Fraction) -> Fraction:
