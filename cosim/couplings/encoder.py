@@ -14,14 +14,14 @@ Encoder roles (Conveyor/Servo FMU names as defaults): ``count`` (``encoder_count
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.couplings.roles import required, resolve
 from cosim.encoders import EncoderSample
 from cosim.errors import ConfigurationError
-from cosim.master import PlantLike
+from cosim.master import Plant, PlantLike
 from cosim.signals import Signal
 
 if TYPE_CHECKING:
@@ -65,6 +65,25 @@ class PlantEncoder:
         resolution = self.sim.timebase.resolution_s  # ticks = seconds * den / num
         self._per_s = (resolution.denominator, resolution.numerator)
         self._last_ceil: tuple[float, int] = (float("nan"), 0)
+        # An FMU plant is read in one prepared call per FMI type (Int32 count and direction, Float64
+        # instants: two calls instead of four reads), into one-element boxes: the same values as read().
+        self._boxes: tuple[list[float], ...] = ([0], [0.0], [0.0], [0])  # count, last, prev, direction
+        self._fill: Callable[[int], None] | None = None
+        if isinstance(plant, Plant):
+            self._fill = plant.fmu.sampler([self._count, self._last, self._prev, self._direction],
+                                           [box.__setitem__ for box in self._boxes])
+            self._advance = plant.advance
+
+    def _read(self) -> tuple[int, float, float, int]:
+        """Count, last and previous edge instants [s] and direction of the plant now (advanced to now)."""
+        fill = self._fill
+        if fill is not None:
+            self._advance()
+            fill(0)  # each sink stores its value at index 0 of its box
+            count, last, prev, direction = self._boxes
+            return int(count[0]), float(last[0]), float(prev[0]), int(direction[0])
+        read = self.plant.read
+        return int(read(self._count)), float(read(self._last)), float(read(self._prev)), int(read(self._direction))
 
     def _ticks_ceil(self, t_s: float) -> int:
         """:meth:`cosim.timebase.TimeBase.ticks_from_seconds_ceil` in integers (the same rule, the same tick).
@@ -94,26 +113,24 @@ class PlantEncoder:
         if t != self.sim.now:
             raise ConfigurationError.out_of_range("t of PlantEncoder.sample", t,
                                                   f"the current time {self.sim.now} (a plant is read now)")
-        read = self.plant.read
-        last = self._edge(float(read(self._last)))
-        prev = self._edge(float(read(self._prev))) if last is not None else None
-        direction = 1 if int(read(self._direction)) >= 0 else -1
-        return EncoderSample(int(read(self._count)), last, prev, direction)
+        count, last_s, prev_s, direction = self._read()
+        last = self._edge(last_s)
+        prev = self._edge(prev_s) if last is not None else None
+        return EncoderSample(count, last, prev, 1 if direction >= 0 else -1)
 
     def extended(self, t: int, fraction_bits: int) -> int:
         """``extend_one_over_t(self.sample(t), t, fraction_bits)`` without building the sample (the servo cycle's)."""
         sim = self.sim
         if t != sim.now:
             self.sample(t)  # raises: a plant is read now
-        read = self.plant.read
+        count, last_s, prev_s, direction = self._read()
         scale = 1 << fraction_bits
-        count = int(read(self._count))
-        last = self._ticks_ceil(float(read(self._last)))
+        last = self._ticks_ceil(last_s)
         if last <= self.start:
             return count * scale
-        up = int(read(self._direction)) >= 0
+        up = direction >= 0
         boundary = count if up else count + 1
-        prev = self._ticks_ceil(float(read(self._prev)))
+        prev = self._ticks_ceil(prev_s)
         if prev <= self.start or last <= prev or t <= last:
             return boundary * scale
         frac = min(scale - 1, ((t - last) * scale) // (last - prev))
