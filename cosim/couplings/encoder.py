@@ -59,6 +59,7 @@ class PlantEncoder:
         self.plant = plant
         self.sim = plant.sim
         self.start = self.sim.now if start is None else start
+        self._env = self.sim.env
         names = resolve(plant, "encoder", ROLES, variables)
         self._count, self._direction = required(names, "count"), required(names, "direction")
         self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
@@ -120,10 +121,16 @@ class PlantEncoder:
 
     def extended(self, t: int, fraction_bits: int) -> int:
         """``extend_one_over_t(self.sample(t), t, fraction_bits)`` without building the sample (the servo cycle's)."""
-        sim = self.sim
-        if t != sim.now:
+        if t != self._env._now:
             self.sample(t)  # raises: a plant is read now
-        count, last_s, prev_s, direction = self._read()
+        fill = self._fill
+        if fill is not None:  # _read(), inline (twice per servo cycle)
+            self._advance()
+            fill(0)
+            boxes = self._boxes
+            count, last_s, prev_s, direction = int(boxes[0][0]), float(boxes[1][0]), float(boxes[2][0]), int(boxes[3][0])
+        else:
+            count, last_s, prev_s, direction = self._read()
         scale = 1 << fraction_bits
         last = self._ticks_ceil(last_s)
         if last <= self.start:
