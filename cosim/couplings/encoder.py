@@ -65,7 +65,8 @@ class PlantEncoder:
         self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
         resolution = self.sim.timebase.resolution_s  # ticks = seconds * den / num
         self._per_s = (resolution.denominator, resolution.numerator)
-        self._last_ceil: tuple[float, int] = (float("nan"), 0)
+        nan = float("nan")
+        self._recent: tuple[float, int, float, int] = (nan, 0, nan, 0)  # the last two instants [s] and their ticks
         # An FMU plant is read in one prepared call per FMI type (Int32 count and direction, Float64
         # instants: two calls instead of four reads), into one-element boxes: the same values as read().
         self._boxes: tuple[list[float], ...] = ([0], [0.0], [0.0], [0])  # count, last, prev, direction
@@ -90,19 +91,23 @@ class PlantEncoder:
         """:meth:`cosim.timebase.TimeBase.ticks_from_seconds_ceil` in integers (the same rule, the same tick).
 
         The float is exactly ``n / d`` (``d`` a power of two), so the time in ticks is exactly
-        ``A / B``; within 10^-6 tick of a whole tick (float noise of a time that was on one) it is
-        that tick (the nearest, halves to even, as ``round`` does), else the next tick up.
+        ``A / B = q + r / B``; within 10^-6 tick of a whole tick (float noise of a time that was on
+        one) it is that tick, else the next tick up. Since ``0 <= r < B``, that is ``q`` when
+        ``r <= B / 10^6`` and ``q + 1`` otherwise (a remainder within 10^-6 of the next tick rounds
+        to it as the ceiling does). The last two instants are kept: an edge read as ``t_last_edge``
+        is read again as ``t_prev_edge`` after the next edge.
         """
-        if t_s == self._last_ceil[0]:  # the same edge as last time (a slow or resting encoder)
-            return self._last_ceil[1]
+        recent = self._recent
+        if t_s == recent[0]:
+            return recent[1]
+        if t_s == recent[2]:
+            return recent[3]
         n, d = t_s.as_integer_ratio()
         den, num = self._per_s
-        a, b = n * den, d * num
-        q, r = divmod(a, b)
-        twice = 2 * r
-        nearest = q + 1 if twice > b or (twice == b and q & 1) else q
-        ticks = nearest if 1_000_000 * abs(a - nearest * b) <= b else (q + 1 if r else q)
-        self._last_ceil = (t_s, ticks)
+        b = d * num
+        q, r = divmod(n * den, b)
+        ticks = q if 1_000_000 * r <= b else q + 1
+        self._recent = (t_s, ticks, recent[0], recent[1])
         return ticks
 
     def _edge(self, t_s: float) -> int | None:
