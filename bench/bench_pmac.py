@@ -180,10 +180,10 @@ def main() -> None:
     if args.floor:
         for label, (counts_per_ms, scan_period) in FLOORS.items():
             floor_run(0.001, counts_per_ms=counts_per_ms, scan_period=scan_period)
-            laps = [(floor_run(args.short, counts_per_ms=counts_per_ms, scan_period=scan_period),
-                     floor_run(args.long, counts_per_ms=counts_per_ms, scan_period=scan_period))
-                    for _ in range(args.repeat)]
-            factors = [(args.long - args.short) / max(long - short, 1e-9) for short, long in laps]
+            pairs = [(floor_run(args.short, counts_per_ms=counts_per_ms, scan_period=scan_period),
+                      floor_run(args.long, counts_per_ms=counts_per_ms, scan_period=scan_period))
+                     for _ in range(args.repeat)]
+            factors = [(args.long - args.short) / max(long - short, 1e-9) for short, long in pairs]
             rounds = f"an empty event every {scan_period // 1000} us" if scan_period else "no other events"
             print(f"  floor of the {label:15s} {spread(factors, '{:.1f}')}x   (plants and kernel alone: conveyor "
                   f"at {counts_per_ms} counts/ms, {rounds})")

@@ -81,7 +81,7 @@ class Signal:
         if new == self.value:
             return False
         self.value = new
-        self._record(self._env._now, new)
+        self._record(self._env._now, new)  # type: ignore[arg-type]  # (the clock is an int)
         for listener in self._listeners:
             listener(self)
         return True

@@ -132,8 +132,9 @@ class PlantEncoder:
         if fill is not None:  # _read(), inline (twice per servo cycle)
             self._advance()
             fill(0)
-            boxes = self._boxes
-            count, last_s, prev_s, direction = int(boxes[0][0]), float(boxes[1][0]), float(boxes[2][0]), int(boxes[3][0])
+            count_box, last_box, prev_box, direction_box = self._boxes
+            count, last_s, prev_s, direction = (int(count_box[0]), float(last_box[0]), float(prev_box[0]),
+                                                int(direction_box[0]))
         else:
             count, last_s, prev_s, direction = self._read()
         scale = 1 << fraction_bits
