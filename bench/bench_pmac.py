@@ -12,12 +12,19 @@ the **marginal real-time factor** is ``(long - short) simulated s / (long - shor
 cancels start-up (imports, FMU loading, the PID design). Printed as min / median / max over the
 repeats (pairing the i-th short with the i-th long run), with the machine's load.
 
+``--floor`` also runs the plants and the kernel alone, without the controller: the Conveyor FMU
+(watched mark, so stepped at every event) and the Servo FMU, and per servo cycle exactly the FMU
+traffic a PMAC run makes (both encoders read, the DAC written to ``u_cmd``), plus the empty events
+of quiet PLC rounds where a run has them (the shear scans every 200 us: two per servo cycle). Its
+marginal real-time factor is the ceiling of a PMAC run with today's master and kernel: no
+controller, however fast, makes the run faster than that.
+
 ``--profile`` adds, for one long run of each, the share of the CPU time per part of the code (cProfile
 self time grouped by module): the PMAC controller, the FMU master and adapter, the kernel, the
 trace and signals, and the rest. ``--startup`` also times ``cosim run <line.toml> --until 1ms`` in a
 fresh process (imports included). Run from the repository root::
 
-    .venv/bin/python bench/bench_pmac.py [--repeat 3] [--short 0.25] [--long 2.25] [--profile] [--startup]
+    .venv/bin/python bench/bench_pmac.py [--repeat 3] [--short 0.25] [--long 2.25] [--profile] [--startup] [--floor]
 """
 
 from __future__ import annotations
@@ -30,6 +37,7 @@ import subprocess
 import sys
 import time
 from collections import Counter
+from collections.abc import Generator
 from pathlib import Path
 
 from clock import machine_load, spread
@@ -75,6 +83,63 @@ def profile(name: str, seconds: float) -> list[tuple[str, float]]:
     return [(label, shares[label] / total) for label, _parts in (*GROUPS, ("other", ()))]
 
 
+FLOORS = {  # label: (conveyor speed [counts/ms], period of quiet PLC rounds [ns] or 0)
+    "flying shear": (256, 200_000),
+    "pmac_fmu_slave": (32, 0),
+}
+
+
+def floor_run(seconds: float, *, counts_per_ms: int, scan_period: int) -> float:
+    """Process CPU time [s] of the plants and the kernel alone, with a PMAC run's FMU traffic per servo cycle."""
+    from cosim.controllers.pmac.units import I10_DEFAULT, ServoClock
+    from cosim.couplings.encoder import PlantEncoder, watch_mark
+    from cosim.couplings.servo import dac_volts
+    from cosim.kernel import At, Simulation
+    from cosim.master import Plant
+    from cosim.plants.conveyor import ConveyorParameters
+    from cosim.presets import load_preset
+    from cosim.signals import Signal
+    from cosim.timebase import Priority
+
+    sim = Simulation()
+    preset = load_preset("conveyor_web_200mm_wheel")
+    speed = counts_per_ms * 1000 / preset["counts_per_metre"]
+    belt = ConveyorParameters.from_mapping({**preset, "mark_offset": 0.0200071, "speed_start": speed})
+    conveyor = Plant.load(sim, "Conveyor", name="conveyor", parameters=belt.as_fmu_parameters())
+    conveyor.set({"speed_cmd": speed})
+    servo = Plant.load(sim, "Servo", name="servo", parameters=load_preset("servo_maxon_re40_24v"))
+    watch_mark(conveyor)
+    master, slave = PlantEncoder(conveyor), PlantEncoder(servo)
+    dac = Signal(sim, "dac", kind="int", unit="bits")
+    servo.drive("u_cmd", dac, convert=dac_volts)
+    clock, env = ServoClock(I10_DEFAULT), sim.env
+
+    def cycles() -> Generator[At, None, None]:
+        k = 0
+        while True:
+            t = clock.t(k)
+            yield At(env, t, Priority.SERVO)
+            master.extended(t, 8)
+            follower = slave.extended(t, 5)
+            dac.set((k * 40 - follower) % 2001 - 1000)  # changes every cycle
+            k += 1
+
+    def quiet_rounds() -> Generator[At, None, None]:  # the instants of a PLC background that has nothing to do
+        k = 0
+        while True:
+            yield At(env, k * scan_period, Priority.HOST + 5)  # runtime.BACKGROUND
+            k += 1
+
+    sim.process(cycles())
+    if scan_period:
+        sim.process(quiet_rounds())
+    started = time.process_time()
+    sim.run(until=sim.ticks(f"{seconds * 1000:g} ms"))
+    used = time.process_time() - started
+    sim.close()
+    return used
+
+
 def startup() -> float:
     """CPU time [s] of ``cosim run line.toml --until 1ms`` in a fresh process (children's rusage)."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -93,6 +158,7 @@ def main() -> None:
     parser.add_argument("--long", type=float, default=2.25, help="long run [simulated s]")
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--startup", action="store_true")
+    parser.add_argument("--floor", action="store_true", help="also the plants and kernel alone (the ceiling)")
     args = parser.parse_args()
     print(f"PMAC runs, {args.short:g} s vs {args.long:g} s simulated, {args.repeat} repeats; {machine_load()}")
     for label, name in RUNS.items():
@@ -111,6 +177,16 @@ def main() -> None:
         if args.profile:
             for group, share in profile(name, args.long):
                 print(f"      {group:24s} {100 * share:5.1f} %")
+    if args.floor:
+        for label, (counts_per_ms, scan_period) in FLOORS.items():
+            floor_run(0.001, counts_per_ms=counts_per_ms, scan_period=scan_period)
+            pairs = [(floor_run(args.short, counts_per_ms=counts_per_ms, scan_period=scan_period),
+                      floor_run(args.long, counts_per_ms=counts_per_ms, scan_period=scan_period))
+                     for _ in range(args.repeat)]
+            factors = [(args.long - args.short) / max(long - short, 1e-9) for short, long in pairs]
+            rounds = f"an empty event every {scan_period // 1000} us" if scan_period else "no other events"
+            print(f"  floor of the {label:15s} {spread(factors, '{:.1f}')}x   (plants and kernel alone: conveyor "
+                  f"at {counts_per_ms} counts/ms, {rounds})")
     if args.startup:
         laps = [startup() for _ in range(args.repeat)]
         print(f"  start-up: cosim run line.toml --until 1ms, process CPU {spread(laps)} s")

@@ -109,6 +109,34 @@ def test_plant_encoder_position_is_1_over_t_truncated(sim: Simulation) -> None:
     assert encoder.position(fraction_bits=8) == Fraction(10 * 256 + 135, 256)
 
 
+def test_plant_encoder_takes_the_first_tick_at_or_after_each_edge(sim: Simulation) -> None:
+    double = EncoderDouble(sim, encoder_count=5)
+    encoder = PlantEncoder(double)
+    cases = [  # (t_last_edge [s], tick [ns])
+        (0.054693046875, 54_693_047),      # mark 2 of the flying shear: 54,693,046.875 ns -> the next ns
+        (442_708e-9, 442_708),             # a whole ns in float: that ns
+        (1e-3 + 5e-16, 1_000_000),         # 0.5e-6 ns above a tick: float noise, that tick
+        (1e-3 - 5e-16, 1_000_000),         # 0.5e-6 ns below: that tick
+        (1e-3 + 1.5e-15, 1_000_001),       # 1.5e-6 ns above: past the tick, the next one
+        (1.0000005e-3, 1_000_001),         # half a ns: the next one
+    ]
+    for t_last_s, tick in cases:
+        double.outputs.update(t_last_edge=t_last_s)
+        assert encoder.sample(0).last_edge_t == tick, t_last_s
+    double.outputs.update(t_last_edge=2e-3, t_prev_edge=1.0000005e-3)  # the edge before is read again as previous
+    assert encoder.sample(0) == EncoderSample(5, 2_000_000, 1_000_001, 1)
+
+
+def test_plant_encoder_reads_the_fmu_outputs_as_read_one_by_one(sim: Simulation) -> None:
+    plant, _speed = conveyor(sim, counts_per_ms=Fraction(32))
+    encoder = PlantEncoder(plant)
+    sim.run(until=3 * MS + 123)
+    count, last_s, prev_s = plant.read("encoder_count"), plant.read("t_last_edge"), plant.read("t_prev_edge")
+    assert count == 96  # 32 counts/ms for 3 ms
+    assert encoder.sample(sim.now) == EncoderSample(
+        int(count), sim.timebase.ticks_from_seconds_ceil(last_s), sim.timebase.ticks_from_seconds_ceil(prev_s), 1)
+
+
 def test_plant_encoder_reads_only_now(sim: Simulation) -> None:
     encoder = PlantEncoder(EncoderDouble(sim))
     with pytest.raises(ConfigurationError, match=r"t of PlantEncoder\.sample = 5 is not allowed"):

@@ -14,14 +14,14 @@ Encoder roles (Conveyor/Servo FMU names as defaults): ``count`` (``encoder_count
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from cosim.couplings.roles import required, resolve
 from cosim.encoders import EncoderSample
 from cosim.errors import ConfigurationError
-from cosim.master import PlantLike
+from cosim.master import Plant, PlantLike
 from cosim.signals import Signal
 
 if TYPE_CHECKING:
@@ -59,30 +59,55 @@ class PlantEncoder:
         self.plant = plant
         self.sim = plant.sim
         self.start = self.sim.now if start is None else start
+        self._env = self.sim.env
         names = resolve(plant, "encoder", ROLES, variables)
         self._count, self._direction = required(names, "count"), required(names, "direction")
         self._last, self._prev = required(names, "t_last_edge"), required(names, "t_prev_edge")
         resolution = self.sim.timebase.resolution_s  # ticks = seconds * den / num
         self._per_s = (resolution.denominator, resolution.numerator)
-        self._last_ceil: tuple[float, int] = (float("nan"), 0)
+        nan = float("nan")
+        self._recent: tuple[float, int, float, int] = (nan, 0, nan, 0)  # the last two instants [s] and their ticks
+        # An FMU plant is read in one prepared call per FMI type (Int32 count and direction, Float64
+        # instants: two calls instead of four reads), into one-element boxes: the same values as read().
+        self._boxes: tuple[list[float], ...] = ([0], [0.0], [0.0], [0])  # count, last, prev, direction
+        self._fill: Callable[[int], None] | None = None
+        if isinstance(plant, Plant):
+            self._fill = plant.fmu.sampler([self._count, self._last, self._prev, self._direction],
+                                           [box.__setitem__ for box in self._boxes])
+            self._advance = plant.advance
+
+    def _read(self) -> tuple[int, float, float, int]:
+        """Count, last and previous edge instants [s] and direction of the plant now (advanced to now)."""
+        fill = self._fill
+        if fill is not None:
+            self._advance()
+            fill(0)  # each sink stores its value at index 0 of its box
+            count, last, prev, direction = self._boxes
+            return int(count[0]), float(last[0]), float(prev[0]), int(direction[0])
+        read = self.plant.read
+        return int(read(self._count)), float(read(self._last)), float(read(self._prev)), int(read(self._direction))
 
     def _ticks_ceil(self, t_s: float) -> int:
         """:meth:`cosim.timebase.TimeBase.ticks_from_seconds_ceil` in integers (the same rule, the same tick).
 
         The float is exactly ``n / d`` (``d`` a power of two), so the time in ticks is exactly
-        ``A / B``; within 10^-6 tick of a whole tick (float noise of a time that was on one) it is
-        that tick (the nearest, halves to even, as ``round`` does), else the next tick up.
+        ``A / B = q + r / B``; within 10^-6 tick of a whole tick (float noise of a time that was on
+        one) it is that tick, else the next tick up. Since ``0 <= r < B``, that is ``q`` when
+        ``r <= B / 10^6`` and ``q + 1`` otherwise (a remainder within 10^-6 of the next tick rounds
+        to it as the ceiling does). The last two instants are kept: an edge read as ``t_last_edge``
+        is read again as ``t_prev_edge`` after the next edge.
         """
-        if t_s == self._last_ceil[0]:  # the same edge as last time (a slow or resting encoder)
-            return self._last_ceil[1]
+        recent = self._recent
+        if t_s == recent[0]:
+            return recent[1]
+        if t_s == recent[2]:
+            return recent[3]
         n, d = t_s.as_integer_ratio()
         den, num = self._per_s
-        a, b = n * den, d * num
-        q, r = divmod(a, b)
-        twice = 2 * r
-        nearest = q + 1 if twice > b or (twice == b and q & 1) else q
-        ticks = nearest if 1_000_000 * abs(a - nearest * b) <= b else (q + 1 if r else q)
-        self._last_ceil = (t_s, ticks)
+        b = d * num
+        q, r = divmod(n * den, b)
+        ticks = q if 1_000_000 * r <= b else q + 1
+        self._recent = (t_s, ticks, recent[0], recent[1])
         return ticks
 
     def _edge(self, t_s: float) -> int | None:
@@ -94,26 +119,31 @@ class PlantEncoder:
         if t != self.sim.now:
             raise ConfigurationError.out_of_range("t of PlantEncoder.sample", t,
                                                   f"the current time {self.sim.now} (a plant is read now)")
-        read = self.plant.read
-        last = self._edge(float(read(self._last)))
-        prev = self._edge(float(read(self._prev))) if last is not None else None
-        direction = 1 if int(read(self._direction)) >= 0 else -1
-        return EncoderSample(int(read(self._count)), last, prev, direction)
+        count, last_s, prev_s, direction = self._read()
+        last = self._edge(last_s)
+        prev = self._edge(prev_s) if last is not None else None
+        return EncoderSample(count, last, prev, 1 if direction >= 0 else -1)
 
     def extended(self, t: int, fraction_bits: int) -> int:
         """``extend_one_over_t(self.sample(t), t, fraction_bits)`` without building the sample (the servo cycle's)."""
-        sim = self.sim
-        if t != sim.now:
+        if t != self._env._now:
             self.sample(t)  # raises: a plant is read now
-        read = self.plant.read
+        fill = self._fill
+        if fill is not None:  # _read(), inline (twice per servo cycle)
+            self._advance()
+            fill(0)
+            count_box, last_box, prev_box, direction_box = self._boxes
+            count, last_s, prev_s, direction = (int(count_box[0]), float(last_box[0]), float(prev_box[0]),
+                                                int(direction_box[0]))
+        else:
+            count, last_s, prev_s, direction = self._read()
         scale = 1 << fraction_bits
-        count = int(read(self._count))
-        last = self._ticks_ceil(float(read(self._last)))
+        last = self._ticks_ceil(last_s)
         if last <= self.start:
             return count * scale
-        up = int(read(self._direction)) >= 0
+        up = direction >= 0
         boundary = count if up else count + 1
-        prev = self._ticks_ceil(float(read(self._prev)))
+        prev = self._ticks_ceil(prev_s)
         if prev <= self.start or last <= prev or t <= last:
             return boundary * scale
         frac = min(scale - 1, ((t - last) * scale) // (last - prev))

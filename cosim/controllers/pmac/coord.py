@@ -427,7 +427,7 @@ class CoordinateSystem:
             if feeder.finished and self._runner.done:
                 self._feeder = None
                 self._ended()
-        elif self._runner.done:
+        elif self._program_name is not None and self._runner.done:  # (_ended() does nothing without a name)
             self._ended()
 
     def _ended(self) -> None:

@@ -529,9 +529,11 @@ class Pmac:
         env, table, clock = self.sim.env, self.table, self.clock
         master = self._master if self._master_pos is not None else None
         method = trigger.method if trigger is not None else None
+        servo, programs = Priority.SERVO, self.programs
+        coordinate_systems, motors = self.cs.values(), self.motors.values()  # live views
         while True:
             t = clock.t(k)
-            yield At(env, t, Priority.SERVO)  # t >= now: the clock's instants only grow
+            yield At(env, t, servo)  # t >= now: the clock's instants only grow
             self._cycle = k
             table.run(t, k)
             if master is not None:
@@ -548,10 +550,10 @@ class Pmac:
                     if self._stale is not None:
                         self._stale.set(trigger.starts[-1].stale)
             if k > k0:
-                for cs in self.cs.values():
+                for cs in coordinate_systems:
                     cs.update(k, t)
-                self.programs.foreground()
-            for motor in self.motors.values():
+                programs.foreground()
+            for motor in motors:
                 motor.update(k, t)
             k += 1
 
