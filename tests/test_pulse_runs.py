@@ -90,7 +90,8 @@ def test_steppers_fed_by_runs_step_at_the_same_instants_and_record_the_same_outp
     # the same plant steps (rows full, stops): runs changed no FMU step, only how segments reach the coupling
     assert {k: v for k, v in stats.items() if k.startswith("steps")} == \
         {k: v for k, v in stats_single.items() if k.startswith("steps")}
-    assert stats["events"] == stats_single["events"]
+    # fewer kernel events: a run goes past the host's quiet cycles (bookkeeping that sees nothing of it)
+    assert stats["events"] < stats_single["events"]
 
 
 def test_a_run_is_the_segments_emit_would_record_one_by_one(sim: Simulation) -> None:
