@@ -271,16 +271,20 @@ class Simulation:
         happens before ``t + quiet_for`` (a host whose command reaches the device one link
         latency later). :meth:`run_bound` lets a controller's run of slots go past such an event.
         """
+        if type(quiet_for) is not int or quiet_for < 0:  # the common case costs one test
+            quiet_for = integer_ticks(quiet_for)
         event = self.at(t, priority)
         if quiet_for:
-            event.quiet_for = integer_ticks(quiet_for)  # type: ignore[attr-defined]
+            event.quiet_for = quiet_for  # type: ignore[attr-defined]
         return event
 
     def quiet_after(self, delay: int, priority: int, *, quiet_for: int) -> Event:
         """:meth:`quiet_at` ``delay`` ticks from now."""
+        if type(quiet_for) is not int or quiet_for < 0:
+            quiet_for = integer_ticks(quiet_for)
         event = self.after(delay, priority)
         if quiet_for:
-            event.quiet_for = integer_ticks(quiet_for)  # type: ignore[attr-defined]
+            event.quiet_for = quiet_for  # type: ignore[attr-defined]
         return event
 
     def call_at(self, t: int, priority: int, callback: Callable[[], None]) -> Event:

@@ -69,6 +69,7 @@ class Link:
         self.profile = profile(link)
         self._drawn: list[int] = []
         self._ns_per_tick: Fraction = sim.timebase.resolution_s * 10**9
+        self._tick_is_ns = self._ns_per_tick == 1
         #: The shortest one-way delay [ticks]: the latency, floored as :meth:`delay` floors every delay.
         self.min_delay = int(self.profile.latency_ns // self._ns_per_tick)
 
@@ -87,13 +88,13 @@ class Link:
         if not self._drawn:
             return self.min_delay
         ns = self._drawn[-1]
-        if self._ns_per_tick == 1:
+        if self._tick_is_ns:
             return ns
         return int(ns // self._ns_per_tick)
 
     def delay(self) -> int:
         """One one-way delay [ticks]: :meth:`delay_ns` floored to the simulation's resolution."""
         ns = self.delay_ns()
-        if self._ns_per_tick == 1:
+        if self._tick_is_ns:
             return ns
         return int(ns // self._ns_per_tick)
