@@ -36,6 +36,7 @@ from __future__ import annotations
 from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
 from itertools import accumulate
+from operator import sub
 from numbers import Integral
 from typing import Any
 
@@ -450,16 +451,17 @@ class PulseEngine:
         times = range(t, t + n * slot, slot)
         pos, emitters, registers = self._pos, self._run_emitters, self.positions
         names, columns = [], []
+        by_axis = list(zip(*counts))  # the counts of the run's slots, axis by axis
         for a, moving in enumerate(key):
             if moving & 1:
-                column = [c[a] for c in counts]
-                p = pos[a]
+                column = list(by_axis[a])
                 if moving >= DIRECTION_BIT:
                     emitters[a](t + setup, slot, column, 0, setup)
-                    positions = [p - x for x in accumulate(column)]
+                    positions = list(accumulate(column, sub, initial=pos[a]))
                 else:
                     emitters[a](t + setup, slot, column, 1, setup)
-                    positions = [p + x for x in accumulate(column)]
+                    positions = list(accumulate(column, initial=pos[a]))
+                del positions[0]  # the position before the run
                 pos[a] = registers[a].value = positions[-1]
                 names.append(a)
                 columns.append(positions)
