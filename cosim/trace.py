@@ -274,7 +274,7 @@ class Trace:
         def extend(times: Sequence[int], columns: Sequence[Sequence[float]]) -> None:
             n = len(times)
             t_list = list(times)
-            for (t_column, v_column), values, each in zip(arrays, columns, extenders):
+            for (t_column, v_column), values, each in zip(arrays, columns, extenders, strict=True):
                 if len(t_column) + n < limit:  # (array.fromlist: several times array.extend's speed)
                     t_column.fromlist(t_list)
                     v_column.fromlist(values if type(values) is list else list(values))

@@ -36,8 +36,8 @@ from __future__ import annotations
 from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
 from itertools import accumulate
-from operator import sub
 from numbers import Integral
+from operator import sub
 from typing import Any
 
 from cosim.controllers.pokeys.buffer import SlotBuffer, check_entry, encode_entry, signed_count
@@ -392,8 +392,10 @@ class PulseEngine:
             if self._runs_ok() and not (sample := switches.sample()).stop_candidate:
                 self._sample = sample
                 free = sim.run_bound()  # this slot runs now whatever else is due at t (later priorities)
-                k += self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS) if free > t else 1) or (
-                    self.run_slot(t) or 1)
+                done = self._run_slots(t, int(min(-(-(free - t) // slot), BUFFER_SLOTS)) if free > t else 1)
+                if not done:
+                    self.run_slot(t)
+                k += done or 1
             else:
                 self.run_slot(t)
                 k += 1
@@ -402,7 +404,7 @@ class PulseEngine:
                 if self._runs_ok():  # a run may pass quiet events (the host's own): they see nothing of it
                     free = sim.run_bound()
                     if free > t:
-                        done = self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS))
+                        done = self._run_slots(t, int(min(-(-(free - t) // slot), BUFFER_SLOTS)))
                         if done:
                             k += done
                             continue
@@ -430,6 +432,8 @@ class PulseEngine:
         what :meth:`run_slot` at each slot start would have given them.
         """
         key, keys, counts_of = self._last_key, self._keys, self._counts
+        if key is None:  # (_runs_ok: a run goes on from a slot that took data)
+            return 0
         counts: list[tuple[int, ...]] = []
         for entry in self.buffer.peek(most):
             entry_key = keys.get(entry)
@@ -450,8 +454,9 @@ class PulseEngine:
         slot, setup = self.slot_ticks, self.dir_setup_ticks
         times = range(t, t + n * slot, slot)
         pos, emitters, registers = self._pos, self._run_emitters, self.positions
-        names, columns = [], []
-        by_axis = list(zip(*counts))  # the counts of the run's slots, axis by axis
+        names: list[int] = []
+        columns: list[Sequence[int]] = []
+        by_axis = list(zip(*counts, strict=True))  # the counts of the run's slots, axis by axis
         for a, moving in enumerate(key):
             if moving & 1:
                 column = list(by_axis[a])
