@@ -270,6 +270,7 @@ class _View:
         for k, code in enumerate(ids):
             self.id_bytes[k, :len(code)] = np.frombuffer(code, dtype=np.uint8)
         self.id_len = np.array([len(i) for i in ids], dtype=np.int64)
+        self.id_sizes = range(int(self.id_len.min()), int(self.id_len.max()) + 1) if ids else range(0)
         self.ids = [i.decode() for i in ids]
         self.last_t = 0
 
@@ -354,31 +355,40 @@ class _View:
             text[at] = lines
             length[at] = digits + 2
         id_len = self.id_len[k]
-        for size in range(int(id_len.min()), int(id_len.max()) + 1):
-            these = np.flatnonzero(~long & (id_len == size))
+        for size in self.id_sizes:
+            these = np.flatnonzero(~long & (id_len == size)) if len(self.id_sizes) > 1 else np.flatnonzero(~long)
             if these.size:
                 at = short_at[change_at[these]]
                 text[at, width - 2 - size] = 48 + (v[these] != 0)
                 text[at, width - 1 - size:width - 1] = self.id_bytes[k[these], :size]
                 text[at, width - 1] = 10
                 length[at] = size + 2
-        short = text[np.arange(width) >= width - length[:, None]].tobytes()
+        # each row's last length[i] bytes, in order (a gather: cheaper than masking the whole matrix)
+        total = int(length.sum())
+        starts = np.arange(length.size, dtype=np.int64) * width + width - length
+        short = text.ravel()[np.repeat(starts - (np.cumsum(length) - length), length)
+                             + np.arange(total, dtype=np.int64)].tobytes()
         if not long.any():
             return short
-        # the long lines, each after the short lines before it
+        # the long lines, each after the short lines before it: formatted in one pass, then the short
+        # text and theirs scattered into one byte array (a long line goes where the short text before
+        # it ends, shifted by the long lines before it)
         rows = np.flatnonzero(long)
         ends = np.concatenate(([0], np.cumsum(length)))[change_at[rows] - np.arange(rows.size)]
-        pieces: list[bytes] = []
-        start = 0
         mask = (1 << 64) - 1
-        for row, end, value in zip(rows.tolist(), ends.tolist(), v[rows].tolist(), strict=True):
-            pieces.append(short[start:end])
-            code = self.ids[k[row]]
-            pieces.append(f"b{int(value) & mask:b} {code}\n".encode() if kind[row] == _INT
-                          else f"r{value!r} {code}\n".encode())
-            start = end
-        pieces.append(short[start:])
-        return b"".join(pieces)
+        ids = self.ids
+        texts = [f"b{int(value) & mask:b} {ids[var]}\n" if is_int else f"r{value!r} {ids[var]}\n"
+                 for value, var, is_int in zip(v[rows].tolist(), k[rows].tolist(), (kind[rows] == _INT).tolist(),
+                                               strict=True)]
+        sizes = np.fromiter(map(len, texts), dtype=np.int64, count=len(texts))
+        total = int(sizes.sum())
+        out = np.empty(len(short) + total, dtype=np.uint8)
+        at = np.repeat(ends, sizes) + np.arange(total, dtype=np.int64)  # line i at ends[i] + its long bytes before
+        is_long_byte = np.zeros(out.size, dtype=bool)
+        is_long_byte[at] = True
+        out[at] = np.frombuffer("".join(texts).encode(), dtype=np.uint8)
+        out[~is_long_byte] = np.frombuffer(short, dtype=np.uint8)
+        return out.tobytes()
 
 
 #: GTKWave trace flags (``@`` lines of a save file): binary, signed decimal, analog step, group begin/end,

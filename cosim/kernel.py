@@ -151,6 +151,7 @@ class At(Event):
 
     cancelled = False  # set by Simulation.cancel
     _ok = True  # triggered when made: every At succeeds
+    quiet_for = 0  # see Simulation.quiet_at
 
     def __init__(self, env: simpy.Environment, t: int, priority: int, value: Any = None) -> None:
         # Event.__init__, inline (as SimPy's own Timeout does); the event is triggered already (_ok).
@@ -170,6 +171,11 @@ class _Call(At):
 
 #: The callback of a ``_Call`` event: ``event.call()``, in C (no Python frame between SimPy and the callback).
 _call = methodcaller("call")
+
+
+def integer_ticks(value: object) -> int:
+    """A count of ticks >= 0 (a quiet event's ``quiet_for``), or ConfigurationError."""
+    return validate.integer(value, "quiet_for", low=0, unit="ticks")
 
 
 def _nothing() -> None:
@@ -257,6 +263,30 @@ class Simulation:
         heappush(self._queue, (t, priority, next(self._eid), event))
         return event
 
+    def quiet_at(self, t: int, priority: int, *, quiet_for: int) -> Event:
+        """:meth:`at`, for a process that keeps to itself: a *quiet* event.
+
+        The waiting process promises that, resumed at ``t``, it reads and changes only its own
+        state (no signal, no other device) and that nothing it then causes that others could see
+        happens before ``t + quiet_for`` (a host whose command reaches the device one link
+        latency later). :meth:`run_bound` lets a controller's run of slots go past such an event.
+        """
+        if type(quiet_for) is not int or quiet_for < 0:  # the common case costs one test
+            quiet_for = integer_ticks(quiet_for)
+        event = self.at(t, priority)
+        if quiet_for:
+            event.quiet_for = quiet_for  # type: ignore[attr-defined]
+        return event
+
+    def quiet_after(self, delay: int, priority: int, *, quiet_for: int) -> Event:
+        """:meth:`quiet_at` ``delay`` ticks from now."""
+        if type(quiet_for) is not int or quiet_for < 0:
+            quiet_for = integer_ticks(quiet_for)
+        event = self.after(delay, priority)
+        if quiet_for:
+            event.quiet_for = quiet_for  # type: ignore[attr-defined]
+        return event
+
     def call_at(self, t: int, priority: int, callback: Callable[[], None]) -> Event:
         """Run ``callback()`` at tick ``t`` with ``priority`` (no process needed); :meth:`cancel` takes it back."""
         env = self.env
@@ -312,6 +342,34 @@ class Simulation:
         if env.look_aheads:
             return env._now
         return env.peek()
+
+    def run_bound(self) -> float:
+        """Like :meth:`free_until`, but a quiet event (:meth:`quiet_at`) at ``t`` counts only from
+        ``t + quiet_for``: the first tick at which something a run of slots could see may happen.
+
+        A process may do, at once, the work of its instants before this tick (a run of slots handed
+        to its listeners); the clock stays where it is (:meth:`skip_to` refuses to pass a queued
+        event) and the quiet events run at their own instants afterwards.
+        """
+        env = self.env
+        if env.look_aheads:
+            return env._now
+        queue = self._queue
+        if env._cancelled:
+            env.drop_cancelled()
+        if not queue:
+            return Infinity
+        t_head, _, _, head = queue[0]
+        quiet = getattr(head, "quiet_for", 0)
+        if not quiet:
+            return t_head
+        bound = t_head + quiet
+        for t, _, _, event in queue:  # (a short queue: the controllers' and the plants' next events)
+            if t < bound:
+                t += getattr(event, "quiet_for", 0)
+                if t < bound:
+                    bound = t
+        return bound
 
     def skip_to(self, t: int, *, passes: int = 1) -> bool:
         """Move the clock to tick ``t`` at once if nothing else can happen before it; else do nothing.

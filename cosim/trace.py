@@ -274,10 +274,10 @@ class Trace:
         def extend(times: Sequence[int], columns: Sequence[Sequence[float]]) -> None:
             n = len(times)
             t_list = list(times)
-            for (t_column, v_column), values, each in zip(arrays, columns, extenders):
+            for (t_column, v_column), values, each in zip(arrays, columns, extenders, strict=True):
                 if len(t_column) + n < limit:  # (array.fromlist: several times array.extend's speed)
                     t_column.fromlist(t_list)
-                    v_column.fromlist(list(values))
+                    v_column.fromlist(values if type(values) is list else list(values))
                 else:
                     each(times, values)
 
@@ -299,7 +299,7 @@ class Trace:
             if len(t0_column) + n < limit:  # (array.fromlist: several times array.extend's speed)
                 t0_column.fromlist(list(range(t0, t0 + n * duration, duration)))
                 duration_column.fromlist([duration] * n)
-                count_column.fromlist(list(counts))
+                count_column.fromlist(counts if type(counts) is list else list(counts))
                 direction_column.fromlist([direction] * n)
             else:
                 for j, count in enumerate(counts):

@@ -240,3 +240,25 @@ def test_progress_is_reported_every_4096_steps_of_work_and_can_be_switched_off(s
     sim.env.on_progress = None
     sim.run(until=3 * 4096)
     assert len(reported) == 2
+
+
+def test_a_run_of_slots_may_go_past_a_quiet_event_up_to_its_horizon(sim: Simulation) -> None:
+    """A host cycle at 10 us that keeps to itself until 10 us + 1.2 ms (its command reaches the
+    device one link delay later) does not bound a run; a plain event does.
+
+    t [us]:   0      10 ............ 500 ...... 1210 ...... 2000
+    quiet            Q ........................ | (Q + 1.2 ms)
+    plain                                                   S
+    run_bound: 1210 us; free_until: 10 us (the next queued event, quiet or not)
+    """
+    sim.quiet_at(10_000, Priority.HOST, quiet_for=1_200_000)
+    sim.at(2_000_000, Priority.SLOT)
+    assert sim.free_until() == 10_000
+    assert sim.run_bound() == 1_210_000
+    assert not sim.skip_to(20_000)  # the clock never passes a queued event, quiet or not
+    sim.call_at(500_000, Priority.NORMAL, lambda: None)
+    assert sim.run_bound() == 500_000  # a plain event before the horizon bounds the run
+    event = sim.quiet_after(7_000, Priority.HOST, quiet_for=0)  # no horizon: an ordinary event
+    assert sim.run_bound() == 7_000 and not getattr(event, "quiet_for", 0)
+    with pytest.raises(ConfigurationError, match="quiet_for"):
+        sim.quiet_at(30_000, Priority.HOST, quiet_for=-1)

@@ -79,18 +79,20 @@ def test_runs_leave_the_same_trace_and_counters_as_one_segment_per_slot() -> Non
     assert digests(with_runs.trace) == digests(single.trace)
     assert [r.value for r in engine.positions] == [r.value for r in engine_single.positions] == [1_200, 0, -700]
     assert engine.slot_index == engine_single.slot_index
-    assert len(with_runs.trace.segments("pokeys.x.step")["count"]) == len(single.trace.segments("pokeys.x.step")["count"])
+    assert len(with_runs.trace.segments("pokeys.x.step")["count"]) == \
+        len(single.trace.segments("pokeys.x.step")["count"])
 
 
 @pytest.mark.fmu
 def test_steppers_fed_by_runs_step_at_the_same_instants_and_record_the_same_outputs() -> None:
-    with_runs, engine, stats = job(runs=True, steppers=True)
+    with_runs, _, stats = job(runs=True, steppers=True)
     single, _, stats_single = job(runs=False, steppers=True)
     assert digests(with_runs.trace) == digests(single.trace)  # commanded_steps at every stop included
     # the same plant steps (rows full, stops): runs changed no FMU step, only how segments reach the coupling
     assert {k: v for k, v in stats.items() if k.startswith("steps")} == \
         {k: v for k, v in stats_single.items() if k.startswith("steps")}
-    assert stats["events"] == stats_single["events"]
+    # fewer kernel events: a run goes past the host's quiet cycles (bookkeeping that sees nothing of it)
+    assert stats["events"] < stats_single["events"]
 
 
 def test_a_run_is_the_segments_emit_would_record_one_by_one(sim: Simulation) -> None:

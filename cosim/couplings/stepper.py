@@ -390,14 +390,13 @@ class StepperCoupling:
             self._write()
             self.writes += 1
             self._dirty = False
-        n = len(rows) // 3
-        if n:  # the rows that end by t, from the first: placed in this step
-            table = np.frombuffer(rows, dtype=np.int64).reshape(n, 3)
-            later = np.flatnonzero(table[:, 0] + table[:, 1] > t)
-            done = 3 * (int(later[0]) if later.size else n)
-            del table, later  # release rows' buffer before it is shortened
-            if done:
-                del rows[:done]  # the plant's value keeps them until the next write
+        # the rows that end by t, from the first: placed in this step (the rows are in time order, so
+        # those that end later are the last few)
+        done = len(rows)
+        while done and rows[done - 3] + rows[done - 2] > t:
+            done -= 3
+        if done:
+            del rows[:done]  # the plant's value keeps them until the next write
 
     def _make_room(self, t: int | None = None) -> None:
         """The rows are full: step the plant to now (or to ``t``, the announcement of a segment of a run),

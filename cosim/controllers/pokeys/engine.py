@@ -37,6 +37,7 @@ from collections.abc import Callable, Generator, Sequence
 from fractions import Fraction
 from itertools import accumulate
 from numbers import Integral
+from operator import sub
 from typing import Any
 
 from cosim.controllers.pokeys.buffer import SlotBuffer, check_entry, encode_entry, signed_count
@@ -390,22 +391,25 @@ class PulseEngine:
             t = t0 + k * slot
             if self._runs_ok() and not (sample := switches.sample()).stop_candidate:
                 self._sample = sample
-                free = sim.free_until()  # this slot runs now whatever else is due at t (later priorities)
-                k += self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS) if free > t else 1) or (
-                    self.run_slot(t) or 1)
+                free = sim.run_bound()  # this slot runs now whatever else is due at t (later priorities)
+                done = self._run_slots(t, int(min(-(-(free - t) // slot), BUFFER_SLOTS)) if free > t else 1)
+                if not done:
+                    self.run_slot(t)
+                k += done or 1
             else:
                 self.run_slot(t)
                 k += 1
             while True:
                 t = t0 + k * slot
-                free = sim.free_until()
-                if free <= t:
+                if self._runs_ok():  # a run may pass quiet events (the host's own): they see nothing of it
+                    free = sim.run_bound()
+                    if free > t:
+                        done = self._run_slots(t, int(min(-(-(free - t) // slot), BUFFER_SLOTS)))
+                        if done:
+                            k += done
+                            continue
+                if sim.free_until() <= t:
                     break  # something else is due first: wait for the slot's event
-                if self._runs_ok():
-                    done = self._run_slots(t, min(-(-(free - t) // slot), BUFFER_SLOTS))
-                    if done:
-                        k += done
-                        continue
                 sim.skip_to(t)
                 self.run_slot(t)
                 k += 1
@@ -428,6 +432,8 @@ class PulseEngine:
         what :meth:`run_slot` at each slot start would have given them.
         """
         key, keys, counts_of = self._last_key, self._keys, self._counts
+        if key is None:  # (_runs_ok: a run goes on from a slot that took data)
+            return 0
         counts: list[tuple[int, ...]] = []
         for entry in self.buffer.peek(most):
             entry_key = keys.get(entry)
@@ -448,17 +454,19 @@ class PulseEngine:
         slot, setup = self.slot_ticks, self.dir_setup_ticks
         times = range(t, t + n * slot, slot)
         pos, emitters, registers = self._pos, self._run_emitters, self.positions
-        names, columns = [], []
+        names: list[int] = []
+        columns: list[Sequence[int]] = []
+        by_axis = list(zip(*counts, strict=True))  # the counts of the run's slots, axis by axis
         for a, moving in enumerate(key):
             if moving & 1:
-                column = [c[a] for c in counts]
-                p = pos[a]
+                column = list(by_axis[a])
                 if moving >= DIRECTION_BIT:
                     emitters[a](t + setup, slot, column, 0, setup)
-                    positions = [p - x for x in accumulate(column)]
+                    positions = list(accumulate(column, sub, initial=pos[a]))
                 else:
                     emitters[a](t + setup, slot, column, 1, setup)
-                    positions = [p + x for x in accumulate(column)]
+                    positions = list(accumulate(column, initial=pos[a]))
+                del positions[0]  # the position before the run
                 pos[a] = registers[a].value = positions[-1]
                 names.append(a)
                 columns.append(positions)

@@ -192,9 +192,7 @@ class HostApp:
         self.sim = sim
         self.engine = engine
         # equal entries share one object: a job of an hour holds millions of slots, mostly repeats
-        shared: dict[Entry, Entry] = {}
-        self.entries: list[Entry] = [shared.setdefault(raw, raw) for raw in
-                                     (_checked(engine, e, i) for i, e in enumerate(entries))]
+        self.entries: list[Entry] = _checked_all(engine, entries)
         self.link = Link(sim, link)
         self.period_ns = integer(period_ns, "period_ns", low=1, high=10**10, unit="ns")
         self.period = sim.ticks(period_ns, "ns", name="period_ns")
@@ -210,6 +208,7 @@ class HostApp:
         self.start_ns = integer(start_ns, "start_ns", low=0, unit="ns")
         self.start = sim.ticks(start_ns, "ns", name="start_ns")
         self.read_pointer = 0
+        self._cycle = 0  # the host loop's cycle (see refill_buffer)
         self.fills = FillLog(keep_fills)
         self.t_buffer_mode: int | None = None
         self.t_last_accepted: int | None = None
@@ -239,11 +238,10 @@ class HostApp:
         """SimPy process: prefill, start buffer mode, then refill every period until the job is sent."""
         sim = self.sim
         yield sim.at(self.start, Priority.HOST)
-        k = 0
         while not self.finished:
             end = self.stall_end(sim.now)
             if end is not None:
-                yield sim.at(end, Priority.HOST)
+                yield self._wake_at(end)
             started = self.t_buffer_mode is not None
             if self.wait is not None and started:
                 self._check_wait()
@@ -258,8 +256,27 @@ class HostApp:
             if not started and (self.read_pointer >= self.prefill_slots or self.finished or full):
                 yield from self._start_buffer_mode()
                 continue
-            k = max(k + 1, -(-(sim.now - self.start) // self.period))
-            yield sim.at(self.start + k * self.period, Priority.HOST)
+            self._cycle = self._next_cycle(sim.now)
+            yield self._wake_at(self.start + self._cycle * self.period)
+
+    def _next_cycle(self, t: int) -> int:
+        """The host loop's next cycle after one that ended at ``t`` (the next period start, none skipped before)."""
+        return max(self._cycle + 1, -(-(t - self.start) // self.period))
+
+    def _keeps_to_itself(self, accepted: int = 0) -> bool:
+        """Will the host, resumed next (after ``accepted`` more slots were accepted), touch only its own state
+        until it sends a command? In buffer mode, with no wait (a wait reads the device's progress) and
+        slots left to send (else the job ends there)."""
+        return (self.t_buffer_mode is not None and self.wait is None
+                and self.read_pointer + accepted < len(self.entries))
+
+    def _wake_at(self, t: int) -> Any:
+        """The event of the host's next cycle at ``t``: quiet (:meth:`~cosim.kernel.Simulation.quiet_at`) while
+        the host keeps to itself: the command it may send then reaches the device the next link delay later
+        (drawn already, or at least the latency)."""
+        if self._keeps_to_itself():
+            return self.sim.quiet_at(t, Priority.HOST, quiet_for=self.link.next_delay())
+        return self.sim.at(t, Priority.HOST)
 
     # -- waits ------------------------------------------------------------------------------------------
     def _begin_wait(self, wait: Wait | None) -> None:
@@ -306,7 +323,7 @@ class HostApp:
         first = len(self.entries)
         bits = tuple(bool(b & DIRECTION_BIT) for b in self._idle)
         entries, after = self.next_piece(value if wait.reads else None, first, bits)
-        self.entries.extend(_checked(self.engine, e, first + i) for i, e in enumerate(entries))
+        self.entries.extend(_checked_all(self.engine, entries, first))
         self._begin_wait(after)
 
     def _estimated_level(self) -> int:
@@ -320,7 +337,12 @@ class HostApp:
         t_device = self.sim.now
         offered = self.entries[self.read_pointer:self.read_pointer + want]
         reply = self.engine.fill_buffer(offered)
-        yield self.sim.after(self.link.delay(), Priority.HOST)
+        if self._keeps_to_itself(reply.accepted):  # the reply: bookkeeping, then the next (quiet) cycle
+            t_reply = self.sim.now + self.link.delay()
+            t_next = self.start + self._next_cycle(t_reply) * self.period
+            yield self.sim.quiet_at(t_reply, Priority.HOST, quiet_for=t_next - t_reply + self.link.next_delay())
+        else:
+            yield self.sim.after(self.link.delay(), Priority.HOST)
         self.read_pointer += reply.accepted
         if reply.accepted:
             self.t_last_accepted = t_device
@@ -333,6 +355,27 @@ class HostApp:
         self.engine.set_state(EngineState.BUFFER)
         self.t_buffer_mode = t_send  # the host's own clock: when it sent the command
         yield self.sim.after(self.link.delay(), Priority.HOST)
+
+
+def _checked_all(engine: PulseEngine, entries: Sequence[object], first: int = 0) -> list[Entry]:
+    """:func:`_checked` of every entry (``first``: the index of the first), equal entries as one object.
+
+    A bytes entry equal to one checked before is that one again (the check reads only its value):
+    a planned job is mostly repeats, so it costs a dictionary look-up, and an error names the
+    first slot that holds the bad value, as checking each in turn does.
+    """
+    shared: dict[object, Entry] = {}
+    out: list[Entry] = []
+    append = out.append
+    for i, entry in enumerate(entries, first):
+        raw = shared.get(entry) if type(entry) is bytes else None
+        if raw is None:
+            raw = _checked(engine, entry, i)
+            raw = shared.setdefault(raw, raw)
+            if type(entry) is bytes:
+                shared[entry] = raw
+        append(raw)
+    return out
 
 
 def _checked(engine: PulseEngine, entry: object, index: int) -> Entry:

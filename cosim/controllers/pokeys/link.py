@@ -69,6 +69,9 @@ class Link:
         self.profile = profile(link)
         self._drawn: list[int] = []
         self._ns_per_tick: Fraction = sim.timebase.resolution_s * 10**9
+        self._tick_is_ns = self._ns_per_tick == 1
+        #: The shortest one-way delay [ticks]: the latency, floored as :meth:`delay` floors every delay.
+        self.min_delay = int(self.profile.latency_ns // self._ns_per_tick)
 
     def delay_ns(self) -> int:
         """One one-way delay [ns], drawn from ``sim.rng``."""
@@ -79,9 +82,19 @@ class Link:
             self._drawn = (p.latency_ns + self.sim.rng.integers(0, p.jitter_ns + 1, size=self.BATCH)).tolist()[::-1]
         return self._drawn.pop()
 
+    def next_delay(self) -> int:
+        """A lower bound of what the next :meth:`delay` returns [ticks], drawing nothing: that delay itself
+        where it is drawn already (from the batch), else the shortest one (the latency)."""
+        if not self._drawn:
+            return self.min_delay
+        ns = self._drawn[-1]
+        if self._tick_is_ns:
+            return ns
+        return int(ns // self._ns_per_tick)
+
     def delay(self) -> int:
         """One one-way delay [ticks]: :meth:`delay_ns` floored to the simulation's resolution."""
         ns = self.delay_ns()
-        if self._ns_per_tick == 1:
+        if self._tick_is_ns:
             return ns
         return int(ns // self._ns_per_tick)

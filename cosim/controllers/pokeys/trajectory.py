@@ -101,6 +101,20 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
     cruise = arriving_distance(vmax, decel, w)  # from this far before the corner on, vmax is not braked
     while not (k == n - 1 and lam == length):
         remaining = length - lam - (1 if w > 0 else 0)
+        if v == vmax and remaining >= cruise:  # cruising: the slots at vmax before the brake point or the
+            # segment's end, at once (each as below: u = vmax, no corner reached)
+            m = min((remaining - cruise) // vmax, (length - 1 - lam) // vmax - 1) + 1
+            if m > 0:
+                lams = range(lam + vmax, lam + (m + 1) * vmax, vmax)
+                steps, ends = [], []
+                for (s, d), before in zip(parts, pos, strict=True):
+                    now = [s + d * x // length for x in lams] if d >= 0 else [s - -d * x // length for x in lams]
+                    steps.append(list(map(sub, now, [before, *now[:-1]])))
+                    ends.append(now[-1])
+                out.extend(zip(*steps, strict=True))
+                pos = ends
+                lam += m * vmax
+                continue
         if remaining >= cruise:  # fastest_arriving(remaining, decel, w) >= vmax: it does not bind
             u = max(max(0, v - decel), min(v + accel, vmax))
         else:
