@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from clock import machine_load, measure, spread
+from clock import figure_line, machine_load, measure, spread
 from fmpy import simulate_fmu
 
 from cosim import gridloop
@@ -245,6 +245,9 @@ def main() -> None:
               f"{spread(python_ratios, '{:.2f}')}; the C loop's samples {'identical' if same else 'DIFFER'}")
         print(f"  {'':<12} doStep + getters through ctypes, nothing else {spread(floor_us, '{:.2f}')}; largest "
               f"difference of the values cosim - fmpy {worst:.3g}")
+        if case.name == "Servo":
+            print(figure_line("master", f"per step, Servo every {case.step_ns / 1e6:g} ms, cosim / fmpy [x]", ratios,
+                              goal=case.target, higher_is_better=False))
     if args.no_extras:
         return
     laser_samples(args.repeat)

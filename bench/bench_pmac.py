@@ -40,7 +40,7 @@ from collections import Counter
 from collections.abc import Generator
 from pathlib import Path
 
-from clock import machine_load, spread
+from clock import figure_line, machine_load, spread
 
 from cosim.catalog import load
 from cosim.runner import run_scenario
@@ -174,6 +174,7 @@ def main() -> None:
                    for short, long in zip(shorts, longs, strict=True)]
         print(f"  {label:15s} marginal real-time factor {spread(factors, '{:.1f}')}x   (CPU short "
               f"{spread(shorts)} s, long {spread(longs)} s; verdicts {', '.join(sorted(verdicts))})")
+        print(figure_line("pmac", f"{label.strip()} marginal real-time factor [x]", factors, goal=25))
         if args.profile:
             for group, share in profile(name, args.long):
                 print(f"      {group:24s} {100 * share:5.1f} %")
