@@ -22,8 +22,9 @@ import hashlib
 import os
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 from lark import Lark
 from lark import __version__ as lark_version
@@ -79,16 +80,25 @@ def _load(path: Path) -> Lark | None:
 
 
 def _save(parser: Lark, path: Path) -> None:
-    """Write ``parser`` to ``path`` whole (a temporary file renamed); an unwritable cache is left alone."""
+    """Write ``parser`` to ``path`` whole; an unwritable cache is left alone."""
+    write_whole(path, parser.save)
+
+
+def write_whole(path: Path, write: Callable[[BinaryIO], object]) -> bool:
+    """Call ``write(stream)`` on a temporary file beside ``path``, then rename it to ``path``, so that a
+    process reading the cache never sees half a file; False (and nothing left behind) when the cache
+    folder cannot be written."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, name = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
     except OSError:
-        return
+        return False
     try:
         with os.fdopen(handle, "wb") as stream:
-            parser.save(stream)
+            write(stream)
         os.replace(name, path)
     except OSError:
         with contextlib.suppress(OSError):
             os.unlink(name)
+        return False
+    return True

@@ -9,11 +9,9 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import os
 import pickle
 import re
 import sys
-import tempfile
 from pathlib import Path
 
 from lark import Tree
@@ -68,22 +66,14 @@ def parse_cached(text: str, name: str) -> Tree:
 
 
 def _save_tree(tree: Tree, path: Path) -> None:
-    """Write ``tree`` to ``path`` whole (a temporary file renamed), then drop the oldest trees beyond the limit."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, name = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    except OSError:
-        return
-    try:
-        with os.fdopen(handle, "wb") as stream:
-            pickle.dump(tree, stream, protocol=pickle.HIGHEST_PROTOCOL)
-        os.replace(name, path)
-        kept = sorted(path.parent.glob("trio-tree-*.pickle"), key=lambda p: p.stat().st_mtime)
-        for old in kept[:-CACHED_TREES]:
-            old.unlink()
-    except OSError:
+    """Write ``tree`` to ``path`` whole, then drop the oldest trees beyond :data:`CACHED_TREES`."""
+    from cosim.controllers.grammars import write_whole
+
+    if write_whole(path, lambda stream: pickle.dump(tree, stream, protocol=pickle.HIGHEST_PROTOCOL)):
         with contextlib.suppress(OSError):
-            os.unlink(name)
+            kept = sorted(path.parent.glob("trio-tree-*.pickle"), key=lambda p: p.stat().st_mtime)
+            for old in kept[:-CACHED_TREES]:
+                old.unlink()
 
 
 def _expected(exc: UnexpectedInput) -> str:
