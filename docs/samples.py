@@ -25,6 +25,7 @@ import re
 import shlex
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,8 +48,18 @@ def run(command: str) -> str:
         raise SystemExit(f"docs/samples.py: a sample runs cosim or python, not {words[0]!r}")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p),
                COLUMNS="100")
-    done = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
+    with tempfile.TemporaryDirectory(prefix="cosim-samples-") as scratch:
+        # an --out folder goes to a scratch folder (shown as given): the checkout gets no results of the samples,
+        # which would otherwise make a later `cosim main` refuse its results folder
+        outs = {}
+        for k, word in enumerate(argv[:-1]):
+            if word == "--out":
+                outs[argv[k + 1]] = str(Path(scratch) / argv[k + 1])
+                argv[k + 1] = outs[argv[k + 1]]
+        done = subprocess.run(argv, cwd=ROOT, env=env, capture_output=True, text=True, check=False)
     text = done.stdout + done.stderr
+    for given, used in outs.items():
+        text = text.replace(used, given)
     text = text.replace(f"{ROOT}/", "").replace(str(ROOT), ".")
     for pattern in WALL:
         text = pattern.sub(r"\1… s", text)

@@ -30,9 +30,13 @@ pytestmark = pytest.mark.fmu
 
 
 def test_every_sample_output_in_the_docs_is_what_its_command_prints_today() -> None:
+    """... and leaves no results in the checkout (a results/x400 there made a later `cosim main` refuse results/)."""
+    before = set((ROOT / "results").glob("*")) if (ROOT / "results").is_dir() else set()
     done = subprocess.run([sys.executable, str(ROOT / "docs" / "samples.py"), "--check"], cwd=ROOT,
                           capture_output=True, text=True, check=False)
     assert done.returncode == 0, done.stdout + done.stderr + "\n(rerun: python docs/samples.py)"
+    after = set((ROOT / "results").glob("*")) if (ROOT / "results").is_dir() else set()
+    assert after <= before
 
 
 def test_the_samples_cover_the_machine_file_page() -> None:
