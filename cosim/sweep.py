@@ -105,14 +105,19 @@ def plan(scenario: str | Path, *, grid: Mapping[str, Sequence[Any]] | None = Non
         run_seed = int(sequence.generate_state(1, dtype=np.uint32)[0])
         runs.append(RunSpec(index, run_seed, values))
     checked: set[tuple[tuple[str, str], ...]] = set()
+    built: set[tuple[str, str]] = set()
     for spec in runs:  # every value against its declared range before the first run (not a NaN row after it)
         key = tuple(sorted(spec.overrides.items()))
         if key not in checked:
             checked.add(key)
             try:
                 script.resolve(spec.overrides)
-                if isinstance(script, MachineFile):  # a key's range is checked where the machine is built
+                # a machine key's range is checked where the machine is built: once per distinct value of
+                # each swept key (a build costs a tenth of a second; ranges that hang on several keys at
+                # once are still checked by each run)
+                if isinstance(script, MachineFile) and not set(spec.overrides.items()) <= built:
                     check_machine(script, overrides=spec.overrides)
+                    built |= set(spec.overrides.items())
             except ConfigurationError as exc:
                 raise ConfigurationError(f"sweep run {spec.index} ({_shown_values(spec.overrides)}): {exc}") from None
     return runs
