@@ -115,7 +115,8 @@ def load_machine(path: str | Path, *, program: str | Path | None = None) -> Mach
         from cosim.machine.build import build_machine
 
         values = run.p.as_dict()
-        if values.get("job", {}).get("check", True) is not False:  # (not --set back to false)
+        job = values.get("job")
+        if not (isinstance(job, dict) and job.get("check") is False):  # (not --set back to false)
             for note in notes:
                 run.note(note)
         table = Table(values, file=path, timebase=run.sim.timebase)
