@@ -220,3 +220,13 @@ def test_no_slot_exceeds_the_engine_limit_and_every_program_ends_exactly(text: s
             counts = [slot[axis] for slot in job.counts]
             # a reversal at an exact stop: the last slot of one segment (<= decel) meets the first of the next
             assert all(abs(b - a) <= (step if a * b >= 0 else 2 * step) for a, b in pairwise(counts))
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_a_job_longer_than_4_hours_of_slots_is_refused_with_its_length_not_planned_into_the_memory(mode: str) -> None:
+    """G1 X1000 F1 takes 1000 min = 16.7 h (60,000,000 slots of 1 ms): refused before its slots are made; the
+    fuzzed arc that met this (I-18513 at F33, 58 h) filled 24 GB and was killed."""
+    with pytest.raises(ConfigurationError, match=r"more than 14,400,000 slots \(4 hours of 1 ms slots\)"):
+        _plan("G1 X1000 F1\n", mode)
+    with pytest.raises(ConfigurationError, match=r"more than 14,400,000 slots"):
+        _plan("G1 X-30.7 F33\nG3 X-28.091 Y-31.169 I-18513 J16.782\n", mode)

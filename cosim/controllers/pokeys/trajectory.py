@@ -37,6 +37,11 @@ from cosim.controllers.pokeys.profile import fastest_arriving
 from cosim.errors import ConfigurationError
 from cosim.validate import integer
 
+#: Most slots a chain is planned into: 4 hours of 1 ms slots. A job is planned whole before it runs, about
+#: 100 bytes a slot, so a longer one is refused with its length instead of filling the memory (a fuzzed arc
+#: of 18.5 m radius at F33 would have taken 58 hours: 24 GB, and the process was killed).
+MAX_PLANNED_SLOTS = 14_400_000
+
 Counts = tuple[int, ...]
 
 
@@ -85,6 +90,12 @@ def corner_speeds(segments: Sequence[Segment]) -> list[int]:
     return speeds
 
 
+def _too_long() -> ConfigurationError:
+    return ConfigurationError(f"the job would take more than {MAX_PLANNED_SLOTS:,} slots (4 hours of 1 ms slots) "
+                              "at its feeds: cosim plans a job whole before it runs; split the program or raise its "
+                              "feeds")
+
+
 def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
     """Per-slot signed counts of a chain, from rest at its first start point to rest at its last end point."""
     if not segments:
@@ -100,10 +111,14 @@ def profile_chain(segments: Sequence[Segment]) -> list[Counts]:
     parts = _parts(seg)
     cruise = arriving_distance(vmax, decel, w)  # from this far before the corner on, vmax is not braked
     while not (k == n - 1 and lam == length):
+        if len(out) > MAX_PLANNED_SLOTS:
+            raise _too_long()
         remaining = length - lam - (1 if w > 0 else 0)
         if v == vmax and remaining >= cruise:  # cruising: the slots at vmax before the brake point or the
             # segment's end, at once (each as below: u = vmax, no corner reached)
             m = min((remaining - cruise) // vmax, (length - 1 - lam) // vmax - 1) + 1
+            if len(out) + m > MAX_PLANNED_SLOTS:
+                raise _too_long()
             if m > 0:
                 lams = range(lam + vmax, lam + (m + 1) * vmax, vmax)
                 steps, ends = [], []
