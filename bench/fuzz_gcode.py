@@ -23,15 +23,12 @@ import multiprocessing
 import random
 import sys
 import time
-import traceback
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
+from fuzzing import SLOW_S, Tally
 from gcode_fuzz_programs import draw, exercise, seeds
-
-#: Wall time above which an input counts as slow [s].
-SLOW_S = 5.0
 
 
 def worker(seed: int, seconds: float, crash_dir: str, limit: int, live: bool = False
@@ -39,29 +36,13 @@ def worker(seed: int, seconds: float, crash_dir: str, limit: int, live: bool = F
     """Fuzz for ``seconds`` or ``limit`` inputs; returns (inputs, run to a tool path, crashes, slowest [s], slow)."""
     rng = random.Random(seed)
     texts = seeds()
-    inputs = parsed = crashes = slow = 0
-    slowest = 0.0
+    tally = Tally(seed, crash_dir)
+    parsed = 0
     end = time.monotonic() + seconds
-    while time.monotonic() < end and inputs < limit:
+    while time.monotonic() < end and tally.inputs < limit:
         text = draw(rng, texts)
-        started = time.monotonic()
-        try:
-            parsed += exercise(text, live=live)
-        except Exception:
-            crashes += 1
-            if crashes <= 20:
-                Path(crash_dir).mkdir(parents=True, exist_ok=True)  # only when there is something to keep
-                path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"
-                path.write_text(f"{text!r}\n\n{traceback.format_exc()}")
-        took = time.monotonic() - started
-        if took > SLOW_S:
-            slow += 1
-            if slow <= 20:
-                Path(crash_dir).mkdir(parents=True, exist_ok=True)
-                (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
-        slowest = max(slowest, took)
-        inputs += 1
-    return inputs, parsed, crashes, slowest, slow
+        parsed += tally.exercise(text, lambda: exercise(text, live=live))  # noqa: B023 (called at once)
+    return tally.inputs, parsed, tally.crashes, tally.slowest, tally.slow
 
 
 def main() -> None:

@@ -23,17 +23,14 @@ import multiprocessing
 import random
 import sys
 import time
-import traceback
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
+from fuzzing import SLOW_S, Tally
 from trio_fuzz_programs import exercise, generate, mutate
 
 from cosim.controllers.trio.basic import example
-
-#: Wall time above which an input counts as slow [s].
-SLOW_S = 5.0
 
 
 def worker(seed: int, seconds: float, crash_dir: str, limit: int | None = None,
@@ -42,36 +39,20 @@ def worker(seed: int, seconds: float, crash_dir: str, limit: int | None = None,
     inputs also run)."""
     rng = random.Random(seed)
     note = example("tn20_81").text
-    inputs = parsed = crashes = slow = ran = 0
-    slowest = 0.0
+    tally = Tally(seed, crash_dir)
+    parsed = ran = 0
     end = time.monotonic() + seconds
-    while time.monotonic() < end and (limit is None or inputs < limit):
+    while time.monotonic() < end and (limit is None or tally.inputs < limit):
         roll = rng.random()
         text = generate(rng) if roll < 0.5 else mutate(rng, note if roll < 0.7 else generate(rng))
-        started = time.monotonic()
         run = parsed % run_every == 0
-        try:
-            ok = exercise(text, run=run)
-            parsed += ok
-            ran += ok and run
-        except Exception:
-            crashes += 1
-            if crashes <= 20:
-                Path(crash_dir).mkdir(parents=True, exist_ok=True)  # only when there is something to keep
-                path = Path(crash_dir) / f"crash_{seed}_{crashes}.txt"
-                path.write_text(f"{text!r}\n\n{traceback.format_exc()}")
-        took = time.monotonic() - started
-        if took > SLOW_S:
-            slow += 1
-            if slow <= 20:
-                Path(crash_dir).mkdir(parents=True, exist_ok=True)
-                (Path(crash_dir) / f"slow_{seed}_{slow}.txt").write_text(f"{took:.1f} s\n{text!r}\n")
-        slowest = max(slowest, took)
-        inputs += 1
-        if progress and inputs % 10_000 == 0:
-            Path(f"{progress}.{seed}").write_text(f"{inputs} inputs, {parsed} parsed, {ran} run, {crashes} crashes, "
-                                                  f"slowest {slowest:.2f} s\n")
-    return inputs, parsed, crashes, slowest, slow, ran
+        ok = tally.exercise(text, lambda: exercise(text, run=run))  # noqa: B023 (called at once)
+        parsed += ok
+        ran += ok and run
+        if progress and tally.inputs % 10_000 == 0:
+            Path(f"{progress}.{seed}").write_text(f"{tally.inputs} inputs, {parsed} parsed, {ran} run, "
+                                                  f"{tally.crashes} crashes, slowest {tally.slowest:.2f} s\n")
+    return tally.inputs, parsed, tally.crashes, tally.slowest, tally.slow, ran
 
 
 def main() -> None:
